@@ -221,6 +221,7 @@ VERDICT_CODES: dict[str, str] = {
     "volume_not_determined": "NOT DETERMINED",
     "rigidity_not_determined": "NOT DETERMINED",
     "one_piece_not_determined": "NOT DETERMINED",
+    "submodels_missing": "NOT DETERMINED",
     "not_converged": "NOT CONVERGED",
     "verification_failed": "VERIFICATION FAILED",
     "tolerance_not_reached": "TOLERANCE NOT REACHED",
@@ -228,8 +229,9 @@ VERDICT_CODES: dict[str, str] = {
 """The warning codes that are a verdict against a result, each with its headline. Most warnings are caveats on an
 answer that stands (a file's unit converted, a fit less close); these say the answer is *no* or *not known*: a tube
 out of tolerance or not measurable against its nominal, a zone whose volume is not known, a fit stopped before it converged, an optimized model that
-failed its own verification, an accuracy asked for and not reached, a LEGO model mostly of parts not in the catalogue or
-one that comes apart as analysed (loose as drawn or held by joints the catalogue lacks: not known which)."""
+failed its own verification, an accuracy asked for and not reached, a LEGO model mostly of parts not in the catalogue,
+one that comes apart as analysed (loose as drawn or held by joints the catalogue lacks: not known which), or one that
+places sub-models its file does not hold."""
 
 
 class ReportVerdict(BaseModel):

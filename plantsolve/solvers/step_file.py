@@ -1,7 +1,7 @@
 """STEP physical files (ISO 10303-21, the text IFC models are written in): whether one ends where the standard
 says it ends, and where one that was cut stops. Shared by the kinds that read IFC (dedup refuses a cut model,
-polyhedra reads the spaces it holds and says the file was cut), and how many attribute values an instance line
-writes (both hold it against the schema its header names)."""
+polyhedra reads the spaces it holds and says the file was cut); the text of one instance, and how many attribute
+values it writes (both hold it against the schema its header names)."""
 
 from __future__ import annotations
 
@@ -48,7 +48,16 @@ def written_attributes(line: str) -> int | None:
     return int(np.count_nonzero((text == ord(",")) & (depth == 1))) + 1
 
 
-def whole_instance(line: str) -> bool:
-    """Whether a line holds one whole instance: it ends with ';' outside strings, its brackets closed."""
-    bare = _STRING.sub("''", line).rstrip()
-    return bare.endswith(";") and bare.count("(") == bare.count(")")
+def instance_text(text: str | bytes, start: int) -> str | bytes | None:
+    """The instance whose '#' is at ``start`` of ``text``, up to its own closing ';' outside strings (a string doubles
+    its quotes inside, so a ';' follows an even number of quotes exactly when it is outside one); None when ``text``
+    ends before it closes. The standard puts no line breaks in the way: a file may write several instances on one
+    line, one over several lines, or its lines ended by CR alone."""
+    semicolon, quote = (b";", b"'") if isinstance(text, bytes) else (";", "'")
+    quotes, at = 0, start
+    while (end := text.find(semicolon, at)) >= 0:
+        quotes += text.count(quote, at, end)
+        if quotes % 2 == 0:
+            return text[start:end + 1]
+        at = end + 1
+    return None

@@ -11,6 +11,7 @@ from collections import Counter
 import ifcopenshell
 
 from plantsolve.solvers.base import reject, utf16_without_mark
+from plantsolve.solvers.ifc_schema import SCHEMAS, attribute_count, counts_elsewhere
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.step_file import where_cut, written_attributes
 
@@ -24,7 +25,6 @@ MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
 # schema (it pads or drops them without failing): "Expected 9 attribute values, found 8 for instance #955"
 ATTRIBUTE_COUNT = "VAL016"
 _COUNTS = re.compile(r"Expected (\d+) attribute values, found (\d+) for instance #(\d+)")
-SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3_ADD2")  # what dedup reads
 
 
 def check_header(head: bytes, tail: bytes) -> None:
@@ -183,20 +183,6 @@ def misfits_schema(model: ifcopenshell.file, text: bytes, lines) -> bool:
         if written is not None and written != firsts[number]:
             return True
     return False
-
-
-def attribute_count(schema: str, entity: str) -> int | None:
-    """How many attributes ``entity`` has in ``schema``, None when the schema has no such entity."""
-    try:
-        return ifcopenshell.schema_by_name(schema).declaration_by_name(entity).attribute_count()
-    except (RuntimeError, IndexError):  # no such entity in that schema
-        return None
-
-
-def counts_elsewhere(counts: dict[str, int | None]) -> str:
-    """'9 in IFC4, none in IFC2X3': an entity's attribute count in each schema of ``counts``."""
-    return ", ".join(f"{count} in {schema}" if count is not None else f"none in {schema}"
-                     for schema, count in counts.items())
 
 
 def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, text: bytes) -> None:

@@ -5,6 +5,7 @@ by in the unit the file defines (its text scanned, the model not parsed)."""
 from __future__ import annotations
 
 import functools
+import itertools
 import re
 from collections import Counter
 
@@ -12,12 +13,13 @@ import ifcopenshell
 from ifcopenshell import ifcopenshell_wrapper
 
 from plantsolve.solvers.base import reject
-from plantsolve.solvers.dedup.ifcio import DEFINITION, SCHEMAS, attribute_count, counts_elsewhere
+from plantsolve.solvers.dedup.ifcio import DEFINITION
 from plantsolve.solvers.dedup.placements import world_coordinate_problem, world_refusal
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import refuse_at_intake, stated_length_unit
+from plantsolve.solvers.ifc_schema import counts_elsewhere, first_misfit
 from plantsolve.solvers.other_kinds import file_holds
-from plantsolve.solvers.step_file import whole_instance, written_attributes
+from plantsolve.solvers.step_file import instance_text
 
 _SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)", re.IGNORECASE)
 
@@ -62,25 +64,25 @@ def refuse_unknown_entity_types(names: list[str], schema: str) -> None:
 
 
 CHUNK = 1 << 20
+CARRIED = 4096  # of a chunk without a ';', the end kept for the next: the start of a definition cut there
 # IfcProduct.Representation is an IfcProductRepresentation: IfcProductDefinitionShape (IFC2X3 may write the
 # supertype itself); without one, no product has geometry
 SHAPES = {b"IFCPRODUCTDEFINITIONSHAPE", b"IFCPRODUCTREPRESENTATION"}
 
 
 @functools.lru_cache(maxsize=8)  # a schema's table, the same every call: walked once per process (3 ms)
-def _entities(schema: str) -> dict[bytes, tuple[str, bool, int]]:
-    """The schema's entities by their name as STEP writes it (capitals): (their name, whether a product, how many
-    attributes)."""
-    return {d.name().upper().encode(): (d.name(), _is_product(d), d.attribute_count())
+def _entities(schema: str) -> dict[bytes, tuple[str, bool]]:
+    """The schema's entities by their name as STEP writes it (capitals): (their name, whether a product)."""
+    return {d.name().upper().encode(): (d.name(), _is_product(d))
             for d in _schema_definition(schema).declarations() if isinstance(d, ifcopenshell_wrapper.entity)}
 
 
 @functools.lru_cache(maxsize=8)
 def _products(schema: str) -> frozenset[bytes]:
-    return frozenset(name for name, (_, is_product, _) in _entities(schema).items() if is_product)
+    return frozenset(name for name, (_, is_product) in _entities(schema).items() if is_product)
 
 
-def _held(counts: Counter, entities: dict[bytes, tuple[str, bool, int]]) -> str:
+def _held(counts: Counter, entities: dict[bytes, tuple[str, bool]]) -> str:
     return ", ".join(f"{n:,} {entities.get(name, (name.decode(errors='replace'),))[0]}"
                      for name, n in counts.most_common(3))
 
@@ -96,16 +98,20 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
     product = shape = False
     carry = b""
     lines_before = 0
+    first = True
     with source.stream() as stream:
         while chunk := stream.read(CHUNK):
             text = carry + chunk
             cut = text.rfind(b";")  # an instance definition is seen whole: the text up to its last ';'
-            text, carry = (text[:cut + 1], text[cut + 1:]) if cut >= 0 else (b"", text[-4096:])
+            if cut < 0:  # inside one long instance (a point list): what is passed over still has its lines
+                lines_before += text.count(b"\n", 0, max(0, len(text) - CARRIED))
+            text, carry = (text[:cut + 1], text[cut + 1:]) if cut >= 0 else (b"", text[-CARRIED:])
             names = Counter(m.group(2).upper() for m in DEFINITION.finditer(text))
             refuse_other_schema(text, [first_definition(text, name) for name in names if name and name not in counts],
                                 lines_before, schema)
-            if not lines_before:  # the contexts and their world coordinate systems come first in an export
+            if first:  # the contexts and their world coordinate systems come first in an export
                 refuse_unplaceable_world(text, schema)
+                first = False
             lines_before += text.count(b"\n")
             counts.update(names)
             product = product or not products.isdisjoint(names)
@@ -124,11 +130,14 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
 
 def first_definition(text: bytes, name: bytes) -> re.Match | None:
     """A definition of an instance of entity ``name`` (as STEP writes it, capitals) in ``text``, which holds one: the
-    first written '#n=NAME(' at a line's start, found by a plain search (a case-blind pattern search took a second
-    over a 60 MB model), else the first the pattern finds."""
+    first written '#n=NAME(', found by a plain search (a case-blind pattern search took a second over a 60 MB model)
+    and matched from the line start or ';' before its '#' (several instances may share a line), else the first the
+    pattern finds."""
     at = text.find(b"=" + name + b"(")
     if at >= 0:
-        found = DEFINITION.match(text, text.rfind(b"\n", 0, at) + 1)
+        number = text.rfind(b"#", 0, at)
+        semicolon, newline = text.rfind(b";", 0, number), text.rfind(b"\n", 0, number)
+        found = DEFINITION.match(text, semicolon if semicolon > newline else newline + 1)
         if found is not None and found.group(2).upper() == name:
             return found
     return re.search(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*(" + re.escape(name) + rb")(?![A-Za-z0-9_])", text,
@@ -141,70 +150,70 @@ def refuse_other_schema(text: bytes, firsts: list[re.Match | None], lines_before
     there (an IFC2X3 model labelled IFC4: its IfcColumn has 8, IFC4's 9). The solve's parse refused these only after
     the job had been accepted. ``firsts``: definitions of entities not seen in an earlier chunk, ``lines_before``:
     the lines of the file before ``text``."""
-    entities = _entities(schema)
-    seen: set[bytes] = set()
-    for match in firsts:
-        if match is None:
-            continue
-        name = match.group(2).upper()
-        if not name or name in seen:  # a complex instance names its parts inside its brackets
-            continue
-        seen.add(name)
-        at = lines_before + text.count(b"\n", 0, match.start(1)) + 1
-        written_name = name.decode("ascii")
-        if name not in entities:
-            fits = [other for other in SCHEMAS if other != schema and attribute_count(other, written_name) is not None]
-            raise reject(f"line {at}: #{match.group(1).decode()}={written_name} is no entity of the header's "
-                         f"FILE_SCHEMA {schema}" + (f" (it is one of {' and '.join(fits)})" if fits else "") +
-                         ": the file is of another schema than its header says, and nothing of it can be optimized "
-                         "as that schema; write the schema the exporter wrote the model in")
-        start = text.rfind(b"\n", 0, match.start(1)) + 1
-        end = text.find(b"\n", match.end())
-        line = text[start:end if end >= 0 else len(text)].decode("latin-1")
-        if not whole_instance(line):  # an instance over several lines: the parse counts its attributes
-            continue
-        written, expected = written_attributes(line), entities[name][2]
-        if written is None or written == expected:
-            continue
-        entity = entities[name][0]
-        counts = {other: attribute_count(other, entity) for other in SCHEMAS if other != schema}
-        fits = [other for other, count in counts.items() if count == written]
-        raise reject(f"line {at}: #{match.group(1).decode()}={written_name} is written with {written} "
-                     f"attribute{'' if written == 1 else 's'}, and "
-                     f"{entity} has {expected} in the header's FILE_SCHEMA {schema} ({counts_elsewhere(counts)}). "
-                     + (f"The content looks like {' or '.join(fits)}: is the header's FILE_SCHEMA wrong? "
-                        if fits else "The file is of another schema than its header says, or broken; ")
-                     + "nothing of it is optimized, as the optimized model would be written in a schema its content "
-                     "is not")
+    misfit = first_misfit(text, firsts, schema, unknown=True)
+    if misfit is None:
+        return
+    at = lines_before + text.count(b"\n", 0, misfit.start) + 1
+    fits = misfit.fits
+    if misfit.entity is None:
+        raise reject(f"line {at}: #{misfit.number}={misfit.name} is no entity of the header's "
+                     f"FILE_SCHEMA {schema}" + (f" (it is one of {' and '.join(fits)})" if fits else "") +
+                     ": the file is of another schema than its header says, and nothing of it can be optimized "
+                     "as that schema; write the schema the exporter wrote the model in")
+    written = misfit.written
+    raise reject(f"line {at}: #{misfit.number}={misfit.name} is written with {written} "
+                 f"attribute{'' if written == 1 else 's'}, and "
+                 f"{misfit.entity} has {misfit.expected} in the header's FILE_SCHEMA {schema} "
+                 f"({counts_elsewhere(misfit.elsewhere)}). "
+                 + (f"The content looks like {' or '.join(fits)}: is the header's FILE_SCHEMA wrong? "
+                    if fits else "The file is of another schema than its header says, or broken; ")
+                 + "nothing of it is optimized, as the optimized model would be written in a schema its content "
+                 "is not")
 
 
 _CONTEXT = re.compile(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*IFCGEOMETRICREPRESENTATIONCONTEXT[ \t]*\(",
                       re.IGNORECASE | re.MULTILINE)
 _REFERENCE = re.compile(rb"#(\d+)")
 WORLD_DEPTH = 3  # context -> its WorldCoordinateSystem -> its Location, Axis, RefDirection
+# a model has a context or two (3D 'Model', 2D 'Plan'): a text of thousands is judged by its first few, each parsed
+# as a model of its own
+MAX_CONTEXTS = 4
 
 
-def _definitions(text: bytes, number: int, depth: int, found: dict[int, bytes]) -> bool:
+def _index(text: bytes) -> dict[int, int]:
+    """Where ``text`` defines each instance: its number -> the offset of its '#' (the first of two definitions)."""
+    index: dict[int, int] = {}
+    for match in DEFINITION.finditer(text):
+        index.setdefault(int(match.group(1)), match.start(1) - 1)
+    return index
+
+
+def _definitions(text: bytes, index: dict[int, int], number: int, depth: int, found: dict[int, bytes]) -> bool:
     """``found`` filled with the definitions of instance ``number`` and of those it refers to, ``depth`` levels down;
     False when one of them is not in ``text`` (further on in the file: the solve looks at it)."""
     if number in found:
         return True
-    line = re.search(rb"(?:^|;)[ \t\r]*(#" + str(number).encode() + rb"[ \t]*=[^;]*;)", text, re.MULTILINE)
-    if line is None:
+    instance = instance_text(text, index[number]) if number in index else None
+    if instance is None:
         return False
-    found[number] = line.group(1)
-    return depth == 0 or all(_definitions(text, int(ref), depth - 1, found)
-                             for ref in _REFERENCE.findall(line.group(1).split(b"=", 1)[1]))
+    found[number] = instance
+    return depth == 0 or all(_definitions(text, index, int(ref), depth - 1, found)
+                             for ref in _REFERENCE.findall(instance.split(b"=", 1)[1]))
 
 
 def refuse_unplaceable_world(text: bytes, schema: str) -> None:
     """A 422 for a representation context whose WorldCoordinateSystem no product can be placed in (a writer's 1e308, a
     zero or parallel axis, a location beyond the context's Precision), read from the file's first chunk: the context
     and the instances it refers to as a model of their own, judged as the solve judges the whole model's (which it
-    refused only after the job had been accepted)."""
-    for context in _CONTEXT.finditer(text):
+    refused only after the job had been accepted). The text's definitions are indexed once, and its first
+    MAX_CONTEXTS contexts judged."""
+    contexts = [int(found.group(1)) for found in itertools.islice(_CONTEXT.finditer(text), MAX_CONTEXTS)]
+    if not contexts:
+        return
+    index = _index(text)
+    for context in contexts:
         found: dict[int, bytes] = {}
-        if not _definitions(text, int(context.group(1)), WORLD_DEPTH, found):
+        if not _definitions(text, index, context, WORLD_DEPTH, found):
             continue
         data = b"\n".join(found[k] for k in sorted(found)).decode("latin-1")
         try:

@@ -12,8 +12,6 @@ import re
 
 from plantsolve.schemas.common import Diagnostic
 
-IMPERIAL = ("ft", "in")
-
 # the note of a geometry field (vertex, origin, coordinate, length, height, width, area, volume) with a length, area or
 # volume unit in braces, as the IDD writes {m}, {m2}, {m3}: any but metres
 _NOTE_UNIT = re.compile(r"!-[^{]*(?:vertex|origin|coordinate|length|height|width|area|volume)[^{]*"
@@ -57,6 +55,18 @@ def followed(warnings: list[dict], file_units: str | None) -> list[dict]:
     return out
 
 
+def _inch_pound_note(line: int, conversion: str, file_unit: str, request_unit: str | None) -> Diagnostic:
+    read = ("metres, as EnergyPlus reads every IDF" if file_unit == "m" else
+            f"read as {file_unit}, as options.file_units says")
+    given = ("the request's unit (metres unless options.units names another)" if request_unit is None else
+             f"{request_unit} (volumes in {request_unit}3, areas in {request_unit}2)")
+    return Diagnostic(code="idf_tables_inch_pound", message=(
+        f"line {line}: OutputControl:Table:Style asks EnergyPlus for {conversion} tables (volumes in ft3, areas in "
+        f"ft2), but the IDF's lengths are {read}: these results are in {given}; give options.units = 'ft' to have "
+        "them in the tables' feet."),
+        details={"line": line, "unit_conversion": conversion, "file_unit": file_unit})
+
+
 def tables_in_inch_pound(objects: list[tuple[str, list[str], list[int], int]]) -> list[Diagnostic]:
     """A warning when the IDF's OutputControl:Table:Style asks EnergyPlus for inch-pound tables: its user reads zone
     volumes in ft3 and areas in ft2 there, while the file's lengths (and so these results, unless the request asks for
@@ -64,17 +74,21 @@ def tables_in_inch_pound(objects: list[tuple[str, list[str], list[int], int]]) -
     feet is 35 times off in volume."""
     for cls, fields, _, line in objects:
         if cls == "outputcontrol:table:style" and len(fields) > 1 and fields[1].lower().startswith("inchpound"):
-            return [Diagnostic(code="idf_tables_inch_pound", message=(
-                f"line {line}: OutputControl:Table:Style asks EnergyPlus for {fields[1]} tables (volumes in ft3, areas "
-                "in ft2), but the IDF's lengths are metres, as EnergyPlus reads every IDF: these results are in "
-                "the request's unit (metres unless options.units names another); give options.units = 'ft' to have "
-                "them in the tables' feet."),
-                details={"line": line, "unit_conversion": fields[1], "file_unit": "m"})]
+            return [_inch_pound_note(line, fields[1], "m", None)]
     return []
 
 
-def tables_answered(warnings: list[dict], request_unit: str) -> list[dict]:
-    """The reader's warnings without the inch-pound tables' one when the request is in feet or inches already."""
-    if request_unit not in IMPERIAL:
-        return warnings
-    return [w for w in warnings if not (isinstance(w, dict) and w.get("code") == "idf_tables_inch_pound")]
+def tables_answered(warnings: list[dict], units: dict) -> list[dict]:
+    """The reader's warnings with the inch-pound tables' one said in the units the lengths were read in and the results
+    are given in (``units``: the source's ``file_unit`` and ``request_unit``), or without it when the request is in
+    the tables' feet."""
+    out = []
+    for w in warnings:
+        if isinstance(w, dict) and w.get("code") == "idf_tables_inch_pound":
+            if units["request_unit"] == "ft":
+                continue
+            details = w.get("details") or {}
+            w = _inch_pound_note(details["line"], details["unit_conversion"], units["file_unit"],
+                                 units["request_unit"]).model_dump()
+        out.append(w)
+    return out

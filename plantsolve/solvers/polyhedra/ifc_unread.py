@@ -15,9 +15,10 @@ import re
 from typing import Any
 
 from plantsolve.schemas.common import Diagnostic
-from plantsolve.solvers.step_file import whole_instance, written_attributes
+from plantsolve.solvers.ifc_schema import first_misfit
 
-_DEFINITION = re.compile(r"^[ \t]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
+# an instance's definition: '#12=' after a line's start or the ';' ending the one before (several may share a line)
+_DEFINITION = re.compile(r"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
 _NAMED = 5
 _LISTED_LINES = 100
 
@@ -76,49 +77,20 @@ def lines_of_another_schema(text: str, model: Any) -> Diagnostic | None:
     header's FILE_SCHEMA (an IFC4 model labelled IFC2X3: its IfcQuantityArea has 5 values, IFC2X3's 4), or None.
     IfcOpenShell pads or drops the values without a word, and reads those it keeps by their place in the header's
     schema: a quantity or a geometry parameter may be read from another attribute. The first instance of each entity
-    is looked at, the text read until each entity the model holds was met."""
-    import ifcopenshell  # noqa: PLC0415  (third-party, only needed for IFC)
-
-    schema = ifcopenshell.schema_by_name(model.schema_identifier)
-    seen: set[str] = set()
-    checked, types = 0, len(model.types())
-    for match in _DEFINITION.finditer(text):
-        name = match.group(2).upper()
-        if not name or name in seen:
-            continue
-        if checked >= types:
-            break
-        seen.add(name)
-        try:
-            expected = schema.declaration_by_name(name).attribute_count()
-        except RuntimeError:  # an entity the schema lacks: lines_left_out names it
-            continue
-        checked += 1
-        end = text.find("\n", match.end())
-        line = text[match.start(1) - 1:end if end >= 0 else len(text)]
-        written = written_attributes(line) if whole_instance(line) else None
-        if written is None or written == expected:
-            continue
-        at = text.count("\n", 0, match.start(1)) + 1
-        entity = schema.declaration_by_name(name).name()
-        fits = [other for other in ("IFC2X3", "IFC4", "IFC4X3_ADD2") if other != model.schema_identifier
-                and _count_in(other, name) == written]
-        return Diagnostic(code="ifc_schema_misfit", message=(
-            f"line {at}: #{match.group(1)}={name} is written with {written} attribute value(s), and {entity} has "
-            f"{expected} in the header's FILE_SCHEMA {model.schema_identifier}"
-            + (f" (the count of {' and '.join(fits)})" if fits else "")
-            + ": IfcOpenShell read the file as its header says, padding or dropping values, so a quantity or a "
-            "shape parameter may be read from another attribute. Is the header's FILE_SCHEMA wrong? Write the schema "
-            "the exporter wrote the model in."),
-            details={"line": at, "entity": entity, "written": written, "expected": expected,
-                     "schema": model.schema_identifier, "fits": fits})
-    return None
-
-
-def _count_in(schema: str, name: str) -> int | None:
-    import ifcopenshell  # noqa: PLC0415
-
-    try:
-        return ifcopenshell.schema_by_name(schema).declaration_by_name(name).attribute_count()
-    except RuntimeError:
+    is looked at, the text read until each entity the model holds was met (an entity the schema lacks is
+    :func:`lines_left_out`'s)."""
+    schema = model.schema_identifier
+    misfit = first_misfit(text, _DEFINITION.finditer(text), schema, unknown=False, limit=len(model.types()))
+    if misfit is None:
         return None
+    at = text.count("\n", 0, misfit.start) + 1
+    fits = misfit.fits
+    return Diagnostic(code="ifc_schema_misfit", message=(
+        f"line {at}: #{misfit.number}={misfit.name} is written with {misfit.written} attribute value(s), and "
+        f"{misfit.entity} has {misfit.expected} in the header's FILE_SCHEMA {schema}"
+        + (f" (the count of {' and '.join(fits)})" if fits else "")
+        + ": IfcOpenShell read the file as its header says, padding or dropping values, so a quantity or a "
+        "shape parameter may be read from another attribute. Is the header's FILE_SCHEMA wrong? Write the schema "
+        "the exporter wrote the model in."),
+        details={"line": at, "entity": misfit.entity, "written": misfit.written, "expected": misfit.expected,
+                 "schema": schema, "fits": fits})

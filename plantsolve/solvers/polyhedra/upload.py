@@ -976,7 +976,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     body = reconcile(body, form.units, file_units, fmt or source.extension[1:])
     if fmt == "idf" and isinstance(body["source"].get("units"), dict):
         source_of = body["source"]
-        source_of["warnings"] = tables_answered(source_of["warnings"], source_of["units"]["request_unit"])
+        source_of["warnings"] = tables_answered(source_of["warnings"], source_of["units"])
     # pydantic names a loop's branch (indices or points) in the path: no key of the file
     return validated_request(FORM, merged(body, form, FORM), form,
                              elsewhere=lambda e: replace(e, loc=("file", *_without_branch(e.loc))))

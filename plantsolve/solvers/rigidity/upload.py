@@ -323,7 +323,9 @@ def parse_ldraw(text: str) -> dict:
     embedded: set[str] = set()
     parts: list[dict] = []
     skipped: list[dict] = []
-    missing: dict[str, list[int]] = {}  # a sub-model placed but not held: the lines placing it
+    # a sub-model placed but not held, by its name's key (LDraw matches names whatever their case): the name as first
+    # written, a held sub-file named alike, and the first MAX_SKIPPED_LISTED lines placing it
+    missing: dict[str, tuple[str, str | None, dict[int, None]]] = {}
     warnings: list[dict] = []
     cut = _cut_last_line(text)
     counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0, "rotations_rounded": 0,
@@ -402,9 +404,11 @@ def parse_ldraw(text: str) -> dict:
                 continue
             ident = f"{prefix}L{number}"
             if role is None and _key(file_name).endswith(MODEL_EXTENSIONS):  # parts are .dat: this is a model
-                alike = _named_alike(file_name, files)
-                if number not in missing.setdefault(file_name, []):
-                    missing[file_name].append(number)
+                if _key(file_name) not in missing:
+                    missing[_key(file_name)] = (file_name, _named_alike(file_name, files), {})
+                _, alike, placing = missing[_key(file_name)]
+                if len(placing) < MAX_SKIPPED_LISTED:  # a line of a sub-model placed again is the same line
+                    placing[number] = None
                 skipped.append({"line": number, "reason": f"places sub-model {file_name!r}, which the file does not "
                                 "hold " + (f"(it holds {alike!r}, named alike: a name misspelt, or its extension "
                                            "changed? names must match but for case)" if alike else
@@ -518,8 +522,8 @@ def parse_ldraw(text: str) -> dict:
                                        "parts_from_primitives": from_primitives,
                                        "stickers_defined": sorted(stickers),
                                        "submodel_placements": placements,
-                                       "missing_submodels": {name: lines[:MAX_SKIPPED_LISTED] for name, lines
-                                                             in list(missing.items())[:MAX_SKIPPED_LISTED]},
+                                       "missing_submodels": {name: list(lines) for name, _, lines
+                                                             in list(missing.values())[:MAX_SKIPPED_LISTED]},
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
                                        "warnings": warnings}}
 

@@ -7,6 +7,7 @@ import math
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.rigidity.catalogue import lookup
+from plantsolve.solvers.rigidity.verdicts import names_lines
 
 MAX_ERRORS = 50
 NEEDS_AXIS = {"hinge", "slider", "cylindrical"}
@@ -75,5 +76,11 @@ def check_input(request: RigidityRequest) -> None:
             errors.append(FieldError(("options", "dock"), "docking needs a parts model"))
         elif lookup(dock.part) is None:
             errors.append(FieldError(("options", "dock", "part"), f"part {dock.part!r} is not in the catalogue"))
+    missing = (request.source or {}).get("missing_submodels")
+    if missing is not None and not names_lines(missing):
+        errors.append(FieldError(("source", "missing_submodels"), "must map each sub-model the file places but does "
+                                 "not hold to the lines placing it, as the LDraw reader writes it "
+                                 "(e.g. {\"upper.ldr\": [3]}); got " + type(missing).__name__ + " " +
+                                 repr(missing)[:80]))
     if errors:
         raise InputRejected(errors[:MAX_ERRORS])

@@ -11,7 +11,7 @@
   from the drawing (official sets that are one build still come apart so, at joints the catalogue lacks), so
   ``rigid`` is null, not false; the ``floating_parts`` and ``separate_pieces`` warnings name each piece with its
   nearest miss.
-- ``rigidity_not_determined`` too when the file places sub-models it does not hold (an ``.mpd`` whose ``0 FILE``
+- ``submodels_missing`` (NOT DETERMINED) when the file places sub-models it does not hold (an ``.mpd`` whose ``0 FILE``
   section was lost, an ``.ldr`` sent without its sub-model files): the parts they hold are in no count, and what they
   would join or leave loose cannot be told, so ``rigid`` is null whatever the parts present make.
 """
@@ -87,14 +87,29 @@ def one_piece_verdict(found: Sequence[Piece]) -> Diagnostic | None:
         details={"pieces": len(loose), "single_parts": singles, "parts": sum(len(pc.parts) for pc in loose)})
 
 
-def missing_submodels_verdict(missing: dict[str, list[int]]) -> Diagnostic | None:
-    """``rigidity_not_determined`` when the file places sub-models it does not hold (``missing``: name -> the lines
-    placing it)."""
-    if not missing:
+def names_lines(missing: object) -> bool:
+    """Whether ``missing`` is what the LDraw reader writes as ``source.missing_submodels``: each sub-model's name ->
+    the lines placing it."""
+    return isinstance(missing, dict) and all(
+        isinstance(name, str) and isinstance(lines, list) and all(type(n) is int for n in lines)
+        for name, lines in missing.items())
+
+
+def missing_submodels_verdict(missing: object) -> Diagnostic | None:
+    """``submodels_missing`` when the file places sub-models it does not hold (``missing``: name -> the lines placing
+    it; a value of another shape, which intake refuses in a written request, says nothing the verdict can name)."""
+    if not missing or not names_lines(missing):
         return None
-    named = ", ".join(f"{name!r} (line {', '.join(map(str, lines[:3]))})" for name, lines in list(missing.items())[:5])
+
+    def placed(name: str, lines: list[int]) -> str:
+        if not lines:
+            return repr(name)
+        return f"{name!r} (line{'s' if len(lines) > 1 else ''} {', '.join(map(str, lines[:3]))}" \
+               f"{' …' if len(lines) > 3 else ''})"
+
+    named = ", ".join(placed(name, lines) for name, lines in list(missing.items())[:5])
     return Diagnostic(
-        code="rigidity_not_determined", message=f"rigidity not determined: the file places {len(missing)} sub-model(s) "
+        code="submodels_missing", message=f"rigidity not determined: the file places {len(missing)} sub-model(s) "
         f"it does not hold — {named}{' and more' if len(missing) > 5 else ''}: their parts are not analysed, and what "
         "they would join or leave loose cannot be told, so dof and the pieces are of the parts present only (rigid is "
         "null); send the model with its sub-models as one .mpd",

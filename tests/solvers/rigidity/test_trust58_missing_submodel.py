@@ -1,7 +1,7 @@
 """An .mpd whose ``0 FILE`` section of a placed sub-model was lost is no verdict on the model: the parts present may be
 rigid, but what the missing ones would join or leave loose cannot be told. Before, the skipped line was a caveat and
-``rigid`` said true of half a model; now the verdict rigidity_not_determined names the sub-model and ``rigid`` is
-null."""
+``rigid`` said true of half a model; now the verdict submodels_missing (NOT DETERMINED) names the sub-model and
+``rigid`` is null."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def _solved(text: str):
 def test_the_whole_tower_is_rigid():
     result = _solved(STACK)
     assert result.rigid is True and result.dof == 0 and len(result.parts) == 4
-    assert "rigidity_not_determined" not in {w.code for w in result.report.warnings}
+    assert "submodels_missing" not in {w.code for w in result.report.warnings}
 
 
 def test_a_tower_without_its_upper_submodel_is_not_determined_naming_it():
@@ -36,6 +36,6 @@ def test_a_tower_without_its_upper_submodel_is_not_determined_naming_it():
     assert len(result.parts) == 2 and result.dof == 0  # the two bricks present are one rigid stack
     assert result.rigid is None  # before: True, of half the model
     verdict = result.report.warnings[0]
-    assert verdict.code == "rigidity_not_determined"
+    assert verdict.code == "submodels_missing"
     assert "'upper.ldr' (line 3)" in verdict.message
     assert verdict.details["missing_submodels"] == ["upper.ldr"] and verdict.details["lines"] == {"upper.ldr": [3]}
