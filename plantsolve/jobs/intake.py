@@ -183,18 +183,21 @@ _forkserver = multiprocessing.get_context("forkserver")
 READER_STARTS = ("forkserver", "fork")
 
 
-# What the forkserver imports when it starts, in the order first asked for. It is one per process (multiprocessing's):
-# the upload readers fork from it and so do the embedded service's job processes (plantsolve.workers.processes), so
-# each adds its modules and neither replaces the other's (the readers' list, set after the job processes' one, had
-# left the warm parent without a single solver: each job process imported its kind's solver itself).
+# What the forkserver imports when it starts, in order. It is one per process (multiprocessing's): the upload readers
+# fork from it and so do the embedded service's job processes (plantsolve.workers.processes), so each adds its modules
+# and neither replaces the other's (the readers' list, set after the job processes' one, had left the warm parent
+# without a single solver: each job process imported its kind's solver itself).
 _preloaded: dict[str, None] = {}
 
 
-def preload_in_forkserver(modules: Iterable[str]) -> list[str]:
-    """Add ``modules`` to what the forkserver imports at its next start; returns the whole list."""
-    _preloaded.update(dict.fromkeys(modules))
+def preload_in_forkserver(modules: Iterable[str], *, first: bool = False) -> None:
+    """Add ``modules`` to what the forkserver imports at its next start: after those already listed, or before them
+    when ``first`` (a module that must run before the others import theirs, whoever asked first)."""
+    added = dict.fromkeys(modules)
+    merged = {**added, **_preloaded} if first else {**_preloaded, **added}
+    _preloaded.clear()
+    _preloaded.update(merged)
     _forkserver.set_forkserver_preload(list(_preloaded))
-    return list(_preloaded)
 
 
 class ForkserverStarts:

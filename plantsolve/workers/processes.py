@@ -243,8 +243,9 @@ class ProcessDispatcher:
         self._disk = DiskHold(ctx)
         settings = JobSettings.model_validate(ctx.settings.model_dump(include=set(JobSettings.model_fields)))
         self._settings_json = settings.model_dump_json()
-        # before anything starts the forkserver (the upload readers share it, adding theirs): it imports all a job needs
-        preload_in_forkserver(warm_modules(ctx.kinds.values(), ctx.settings.plugins))
+        # before anything starts the forkserver (the upload readers share it, adding theirs): it imports all a job needs,
+        # this module first (see warm_modules) even when an upload reader's list was set before
+        preload_in_forkserver(warm_modules(ctx.kinds.values(), ctx.settings.plugins), first=True)
 
     # ---- the dispatcher protocol ----------------------------------------------------------------
 
