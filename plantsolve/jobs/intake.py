@@ -206,19 +206,31 @@ class ForkserverStarts:
     that dies at every start (the out-of-memory killer, a library that crashes at import) costs each start the imports
     of every kind: the dispatcher tried again every second, and each upload started one of its own, for as long as
     the cause lasted. Now the first failure is tried again at once, the next after ``first_pause``, then twice as long
-    each time up to ``longest``; a failure more than ``apart`` seconds after the one before counts as a first."""
+    each time up to ``longest``; a failure more than ``apart`` seconds after the one before counts as a first.
+
+    One death is seen by every caller that used that forkserver (the uploads waiting on it, the dispatcher): each
+    takes :meth:`current` before its start and passes it to :meth:`failed`, which counts a start's failure once."""
 
     def __init__(self, first_pause: float = 1.0, longest: float = 30.0, apart: float = 60.0):
         self.first_pause, self.longest, self.apart = first_pause, longest, apart
         self.failures = 0
+        self._start = 0  # the forkserver start callers use now: one more after each failure counted
         self._last = float("-inf")  # the last failure (monotonic)
         self._due = float("-inf")  # when the next start may be tried (monotonic)
         self._lock = threading.Lock()
 
-    def failed(self) -> float:
-        """A start failed, or the forkserver died: returns the pause before the next start."""
+    def current(self) -> int:
+        """The forkserver start a caller is about to use (or wait on): what it passes to :meth:`failed`."""
+        return self._start
+
+    def failed(self, start: int) -> float:
+        """Forkserver start ``start`` (:meth:`current`) failed, or the forkserver died: returns the pause before the
+        next start. Its failure counts once, however many callers saw it."""
         with self._lock:
             now = time.monotonic()
+            if start != self._start:  # another caller counted it already
+                return max(0.0, self._due - now)
+            self._start += 1
             self.failures = self.failures + 1 if now - self._last < self.apart else 1
             self._last = now
             pause = 0.0 if self.failures == 1 else min(self.first_pause * 2 ** (self.failures - 2), self.longest)
@@ -321,6 +333,7 @@ def _bounded(spec: SolverSpec, what: str, source: StoredInput, options: dict | N
         spec.preload(SolverSpec.READERS)  # here, so the child imports nothing under its memory limit
     if start == "forkserver":
         FORKSERVER_STARTS.refuse_while_paused()
+        forkserver_start = FORKSERVER_STARTS.current()
     context = multiprocessing.get_context(start)
     receiver, sender = context.Pipe(duplex=False)
     process = context.Process(
@@ -331,7 +344,7 @@ def _bounded(spec: SolverSpec, what: str, source: StoredInput, options: dict | N
     except Exception:
         receiver.close()
         if start == "forkserver":
-            FORKSERVER_STARTS.failed()
+            FORKSERVER_STARTS.failed(forkserver_start)
         raise
     finally:
         sender.close()

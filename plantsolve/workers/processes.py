@@ -232,6 +232,7 @@ class ProcessDispatcher:
         self._thread: threading.Thread | None = None
         self._start_watch: threading.Thread | None = None
         self._warm_parent: int | None = None  # its pid once a fork has come back from it
+        self._warm_start = FORKSERVER_STARTS.current()  # the forkserver start it is (see ForkserverStarts.failed)
         self._warm_since = 0.0  # when it came up (monotonic)
         self._start_failed: str | None = None
         self._start_began: float | None = None  # when the start of a job process under way began (monotonic)
@@ -410,32 +411,34 @@ class ProcessDispatcher:
         learn its pid: from then on a job starts in milliseconds. A start that fails is tried again later
         (:class:`~plantsolve.jobs.intake.ForkserverStarts`)."""
         started = time.monotonic()
+        forkserver_start = FORKSERVER_STARTS.current()
         receiver, sender = _warm.Pipe(duplex=False)
         try:
             probe = _warm.Process(target=_parent_pid, args=(sender,), daemon=True, name="warm-probe")
             probe.start()
             sender.close()
             self._warm_parent = receiver.recv()
+            self._warm_start = forkserver_start
             probe.join(5)
             self._start_failed = None
             self._warm_since = time.monotonic()
             log.info("job processes ready: warm parent %d up in %.1f s", self._warm_parent, time.monotonic() - started)
         except Exception as error:
             self._start_failed = type(error).__name__
-            self._warm_failed(f"could not be started ({error})")
+            self._warm_failed(f"could not be started ({error})", forkserver_start)
         finally:
             sender.close()
             receiver.close()
 
     def _warm_died(self) -> None:
         self._warm_parent = None
-        self._warm_failed(f"died {time.monotonic() - self._warm_since:.1f} s after it came up")
+        self._warm_failed(f"died {time.monotonic() - self._warm_since:.1f} s after it came up", self._warm_start)
 
-    def _warm_failed(self, what: str) -> None:
+    def _warm_failed(self, what: str, forkserver_start: int) -> None:
         """A failed start of the warm parent, or its death: started again at once the first time, after a pause that
         doubles with each failure in a row after that (:class:`~plantsolve.jobs.intake.ForkserverStarts`); the jobs
         stay queued meanwhile and readiness says no job can start."""
-        pause = FORKSERVER_STARTS.failed()
+        pause = FORKSERVER_STARTS.failed(forkserver_start)
         log.error("the job processes' warm parent %s (%d time(s) in a row); %s", what, FORKSERVER_STARTS.failures,
                   f"the next start in {pause:g} s, queued jobs waiting" if pause else "starting it again")
 
