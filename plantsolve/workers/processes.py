@@ -190,6 +190,7 @@ class _Running:
     started: str | None  # see _started: read right after the start, while the process is surely this job's
     began: float  # monotonic
     warm: int | None  # the warm parent it was forked from: it reports the process's exit status
+    kind: str = ""  # its job's kind, when known
     killed_at_limit: bool = False
     abandoned: bool = False  # killed because its attempt had ended (see jobs.leases.abandoned)
 
@@ -278,6 +279,7 @@ class ProcessDispatcher:
             self._running.clear()
             self._waiting.clear()
             self._later.clear()
+            self._unclaimed.clear()
         for child in running:
             try:
                 handed_back(self.ctx, child.job_id)
@@ -486,7 +488,8 @@ class ProcessDispatcher:
             deadline = time.monotonic() + self.ctx.limits(spec)[1] + HARD_LIMIT_GRACE if spec is not None else None
             with self._lock:
                 self._running[job_id] = _Running(job_id, process, receiver, worker_of(process.pid), deadline,
-                                                 _started(process.pid), time.monotonic(), self._warm_parent)
+                                                 _started(process.pid), time.monotonic(), self._warm_parent,
+                                                 spec.kind if spec is not None else kind)
                 self._starting = None
 
     def _start_stalled(self) -> bool:
@@ -534,17 +537,16 @@ class ProcessDispatcher:
         if again:
             self.enqueue(child.job_id)
 
-    def _died_unclaimed(self, job_id: uuid.UUID) -> bool:
-        """``job_id``'s process died before it claimed the job: whether it goes back in line now (the first time in a
-        row), or after a pause (see ``_unclaimed``)."""
-        deaths = self._unclaimed[job_id] = self._unclaimed.get(job_id, 0) + 1
+    def _died_unclaimed(self, job_id: uuid.UUID, kind: str, deaths: int) -> bool:
+        """``job_id``'s process died before it claimed the job, after ``deaths`` such deaths in a row: whether it goes
+        back in line now (the first time in a row), or after a pause (see ``_unclaimed``)."""
+        deaths = self._unclaimed[job_id] = deaths + 1
         if deaths == 1:
             log.error("job %s: its process died before it could claim the job; it starts again", job_id)
             return True
         pause = min(RETRY_SECONDS * 2 ** (deaths - 2), UNCLAIMED_PAUSE_MAX)
-        job = self.ctx.repo.get(job_id, brief=True)
         with self._lock:
-            self._later[job_id] = (time.monotonic() + pause, job.kind if job is not None else "")
+            self._later[job_id] = (time.monotonic() + pause, kind)
         log.error("job %s: its process died before it could claim the job, %d times in a row; it starts again in "
                   "%.0f s (no attempt counted)", job_id, deaths, pause)
         return False
@@ -552,6 +554,7 @@ class ProcessDispatcher:
     def _judge_end(self, child: _Running, outcome: str | None) -> bool:
         """Write how ``child``'s attempt ended, when its process did not (killed at the hard limit, died); returns
         whether its job goes back in line."""
+        deaths = self._unclaimed.pop(child.job_id, 0)  # kept again only by another death before the claim
         if outcome is None:
             try:
                 remove_temporaries(self.ctx, child.job_id, child.process.pid)
@@ -571,14 +574,15 @@ class ProcessDispatcher:
                 # with it, say): the job process's own status is not known, and was most often a signal, not 255
                 exitcode = None
             fate = process_died(self.ctx, child.job_id, child.worker, exitcode)
+            if child.abandoned:
+                # killed here after the sweep took its attempt back (queued again, counted): not a death before the
+                # claim, whatever the row says now
+                return fate in ("requeued", "queued")
             if fate == "queued":
-                return self._died_unclaimed(child.job_id)
-            self._unclaimed.pop(child.job_id, None)
-            if not child.abandoned:
-                log.error("job %s: its process died (exit code %s); the job is %s", child.job_id,
-                          "unknown" if exitcode is None else exitcode, fate)
+                return self._died_unclaimed(child.job_id, child.kind, deaths)
+            log.error("job %s: its process died (exit code %s); the job is %s", child.job_id,
+                      "unknown" if exitcode is None else exitcode, fate)
             return fate == "requeued"
-        self._unclaimed.pop(child.job_id, None)
         return outcome == "requeued"
 
     def _enforce_deadlines(self) -> None:

@@ -123,11 +123,12 @@ def test_a_job_whose_process_dies_before_its_claim_again_and_again_waits_longer_
     monkeypatch.setattr(processes, "RETRY_SECONDS", 0.2)
     dispatcher = ProcessDispatcher(ctx, workers=1)
     job_id = _queued(ctx)
+    child = _died_before_its_claim(job_id)
     # the first death in a row: back in line at once (a one-off kill mid-fork costs nothing)
-    assert dispatcher._died_unclaimed(job_id) is True
+    assert dispatcher._judge_end(child, None) is True
     for pause in (0.2, 0.4, 0.8):  # before: started again at once, each time
         before = time.monotonic()
-        assert dispatcher._died_unclaimed(job_id) is False
+        assert dispatcher._judge_end(child, None) is False
         due = dispatcher._later[job_id][0]
         assert before + pause <= due <= time.monotonic() + pause
     assert dispatcher._later[job_id][1] == "test-compute"
@@ -147,6 +148,13 @@ class _Ended:
 
     def __init__(self, pid: int):
         self.pid, self.exitcode = pid, 255
+
+
+def _died_before_its_claim(job_id: uuid.UUID) -> processes._Running:
+    """A job process of ``job_id`` (a queued job) that ended without a word."""
+    worker = processes.worker_of(4_000_000)  # no such process
+    return processes._Running(job_id, _Ended(4_000_000), None, worker, None, None, time.monotonic(), None,
+                              "test-compute")
 
 
 def test_a_job_process_whose_warm_parent_died_too_is_not_said_to_have_exited_with_code_255(ctx):

@@ -1,18 +1,28 @@
 """Restarts of the forkserver and of job processes, as seen once (runtime58's review): one forkserver death seen by
-several callers counts once."""
+several callers counts once; a hung process killed after the sweep re-queued its job did not die before its claim;
+the count of deaths before the claim ends with any other end."""
 
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import threading
+import time
+import uuid
 
 import pytest
 
 from plantsolve.jobs import intake
+from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import INFRASTRUCTURE
 from plantsolve.jobs.intake import ForkserverStarts
+from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.kinds import load_kinds
+from plantsolve.workers import processes
+from plantsolve.workers.processes import ProcessDispatcher
+from tests.conftest import service_settings
+from tests.support.dispatch import Recorder
 
 PLUGINS = ("tests.support.kinds",)
 
@@ -64,3 +74,51 @@ def test_uploads_that_saw_one_forkserver_die_pause_nothing(tmp_path, fresh_forks
     assert len(said) == 3 and all(isinstance(error, INFRASTRUCTURE) for error in said), said
     # one death: the next start is tried at once (before: 3 failures, the next start 2 s later)
     assert fresh_forkserver_starts.failures == 1 and fresh_forkserver_starts.pause_left() == 0
+
+
+@pytest.fixture
+def ctx(tmp_path):
+    context = ServiceContext.create(service_settings(tmp_path, embedded_mode="process"), migrate=True)
+    yield context
+    context.close()
+
+
+def _queued(ctx) -> uuid.UUID:
+    return JobService(ctx, Recorder(), readers=[]).submit_json("test-compute", b'{"values": [1]}', None).job.id
+
+
+class _Killed:
+    """A job process that ended by SIGKILL, as multiprocessing reports it."""
+
+    def __init__(self, pid: int):
+        self.pid, self.exitcode = pid, -signal.SIGKILL
+
+
+def _child(job_id: uuid.UUID, **flags) -> processes._Running:
+    worker = processes.worker_of(4_000_000)  # no such process
+    return processes._Running(job_id, _Killed(4_000_000), None, worker, None, None, time.monotonic(), None,
+                              "test-compute", **flags)
+
+
+def test_a_hung_process_killed_after_the_sweep_requeued_its_job_starts_it_again_at_once_each_time(ctx):
+    dispatcher = ProcessDispatcher(ctx, workers=1)
+    job_id = _queued(ctx)  # queued again by the sweep, whose attempt it had held
+    # before: the second such kill paused the job 1 s, the third 2 s ... as if its process died before its claim
+    assert [dispatcher._judge_end(_child(job_id, abandoned=True), None) for _ in range(3)] == [True] * 3
+    assert dispatcher._later == {} and dispatcher._unclaimed == {}
+
+
+def test_deaths_before_the_claim_are_forgotten_at_any_other_end_and_at_stop(ctx):
+    dispatcher = ProcessDispatcher(ctx, workers=1)
+    job_id = _queued(ctx)
+    for _ in range(2):
+        dispatcher._judge_end(_child(job_id), None)
+    assert dispatcher._unclaimed == {job_id: 2}
+    dispatcher._judge_end(_child(job_id, killed_at_limit=True), None)  # before: kept for ever
+    assert dispatcher._unclaimed == {}
+    dispatcher._judge_end(_child(job_id), None)
+    dispatcher.stop()
+    assert dispatcher._unclaimed == {} and dispatcher._later == {}
+    # the next death before its claim is a first again: back in line at once
+    dispatcher._stopping.clear()
+    assert dispatcher._judge_end(_child(job_id), None) is True
