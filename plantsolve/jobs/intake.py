@@ -43,6 +43,7 @@ from typing import Any, Callable, Iterable, Iterator
 from pydantic import ValidationError
 
 from plantsolve.jobs.errors import (
+    ReadersPaused,
     Unprocessable,
     UnsupportedMediaType,
     array_bounds,
@@ -242,11 +243,11 @@ class ForkserverStarts:
         return max(0.0, self._due - time.monotonic())
 
     def refuse_while_paused(self) -> None:
-        """Raise (an infrastructure failure: a 503) while a start may not be tried."""
+        """Raise :class:`~plantsolve.jobs.errors.ReadersPaused` (a 503 asking to come back when the pause ends) while
+        a start may not be tried."""
         left = self.pause_left()
         if left > 0:
-            raise ConnectionRefusedError(f"the forkserver failed {self.failures} start(s) in a row; the next may be "
-                                         f"tried in {left:.1f} s")
+            raise ReadersPaused(self.failures, left)
 
 
 FORKSERVER_STARTS = ForkserverStarts()

@@ -9,9 +9,12 @@ import signal
 import threading
 import time
 import uuid
+from multiprocessing import forkserver
 
 import pytest
+from fastapi.testclient import TestClient
 
+from plantsolve.app.main import create_app
 from plantsolve.jobs import intake
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import INFRASTRUCTURE
@@ -122,3 +125,37 @@ def test_deaths_before_the_claim_are_forgotten_at_any_other_end_and_at_stop(ctx)
     # the next death before its claim is a first again: back in line at once
     dispatcher._stopping.clear()
     assert dispatcher._judge_end(_child(job_id), None) is True
+
+
+class _DiesAtStart:
+    """A forkserver that dies at every start."""
+
+    starts = 0
+
+    def __init__(self, *args, **kwargs):
+        pass
+
+    def start(self) -> None:
+        _DiesAtStart.starts += 1
+        raise EOFError("unexpected EOF")
+
+
+def test_an_upload_during_a_pause_is_refused_before_it_is_stored_and_told_when_to_come_back(
+        tmp_path, fresh_forkserver_starts, monkeypatch):
+    monkeypatch.setattr(forkserver, "ensure_running", lambda: None)  # no readers' forkserver started by the app
+    monkeypatch.setattr(fresh_forkserver_starts, "first_pause", 12.0)
+    monkeypatch.setattr(multiprocessing.get_context("forkserver"), "Process", _DiesAtStart)
+    _DiesAtStart.starts = 0
+    app = create_app(service_settings(tmp_path))
+    files = app.state.jobs.ctx.files
+    stored: list[str] = []
+    put = files.put
+    monkeypatch.setattr(files, "put", lambda key, *args, **kwargs: stored.append(key) or put(key, *args, **kwargs))
+    with TestClient(app) as client:
+        said = [client.post("/v1/test-compute/jobs", files={"file": ("v.txt", b"1.5\n")}) for _ in range(3)]
+    assert [r.status_code for r in said] == [503] * 3 and _DiesAtStart.starts == 2
+    # the first two reached a start (the second failure pauses the next for 12 s); the third stored nothing
+    # (before: stored, then deleted) and is asked to come back when the pause ends (before: Retry-After 5)
+    assert len(stored) == 2
+    assert said[2].headers["retry-after"] == "12" and said[2].headers["content-type"] == "application/problem+json"
+    assert "next start is tried in 12 s" in said[2].json()["detail"]
