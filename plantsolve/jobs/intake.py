@@ -42,6 +42,7 @@ from typing import Any, Callable, Iterable, Iterator
 
 from pydantic import ValidationError
 
+from plantsolve.jobs.backoff import FORKSERVER_RESTARTS, Backoff
 from plantsolve.jobs.errors import (
     ReadersPaused,
     Unprocessable,
@@ -206,14 +207,14 @@ class ForkserverStarts:
     it first starts it: the job processes' dispatcher (it is their warm parent) or an upload's reading process. One
     that dies at every start (the out-of-memory killer, a library that crashes at import) costs each start the imports
     of every kind: the dispatcher tried again every second, and each upload started one of its own, for as long as
-    the cause lasted. Now the first failure is tried again at once, the next after ``first_pause``, then twice as long
-    each time up to ``longest``; a failure more than ``apart`` seconds after the one before counts as a first.
+    the cause lasted. Now the starts after failures in a row wait as ``backoff`` says (the first failure is tried
+    again at once); a failure more than ``apart`` seconds after the one before counts as a first.
 
     One death is seen by every caller that used that forkserver (the uploads waiting on it, the dispatcher): each
     takes :meth:`current` before its start and passes it to :meth:`failed`, which counts a start's failure once."""
 
-    def __init__(self, first_pause: float = 1.0, longest: float = 30.0, apart: float = 60.0):
-        self.first_pause, self.longest, self.apart = first_pause, longest, apart
+    def __init__(self, backoff: Backoff = FORKSERVER_RESTARTS, apart: float = 60.0):
+        self.backoff, self.apart = backoff, apart
         self.failures = 0
         self._start = 0  # the forkserver start callers use now: one more after each failure counted
         self._last = float("-inf")  # the last failure (monotonic)
@@ -234,7 +235,7 @@ class ForkserverStarts:
             self._start += 1
             self.failures = self.failures + 1 if now - self._last < self.apart else 1
             self._last = now
-            pause = 0.0 if self.failures == 1 else min(self.first_pause * 2 ** (self.failures - 2), self.longest)
+            pause = self.backoff.pause(self.failures)
             self._due = now + pause
             return pause
 

@@ -28,6 +28,7 @@ from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Iterable
 
+from plantsolve.jobs.backoff import UNCLAIMED_RESTARTS
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.holds import DiskHold
 from plantsolve.jobs.intake import FORKSERVER_STARTS, preload_in_forkserver
@@ -54,8 +55,6 @@ RETRY_SECONDS = 1.0
 STALL_SECONDS = 10.0
 # how long the ends of job processes killed with the warm parent may take to reach the supervisor (see _supervise)
 WARM_DEATH_SECONDS = 0.2
-# the longest pause before a job whose process died before its claim, again and again, starts again (see _unclaimed)
-UNCLAIMED_PAUSE_MAX = 30.0
 
 _warm = multiprocessing.get_context("forkserver")
 
@@ -220,10 +219,8 @@ class ProcessDispatcher:
         self._running: dict[uuid.UUID, _Running] = {}
         self._waiting: deque[tuple[uuid.UUID, str]] = deque()
         self._starting: uuid.UUID | None = None  # taken from the line, its process not started yet
-        # A job whose process died before it claimed the job (nothing of it ran, no attempt counted) goes back in line
-        # at once the first time, after a pause doubling with each such death in a row after that (up to
-        # UNCLAIMED_PAUSE_MAX): a process killed at every start (a watchdog, the out-of-memory killer, a database job
-        # processes cannot open) was started again at once, hundreds of times a minute, for as long as the cause lasted.
+        # A job whose process died before it claimed the job goes back in line after the pause UNCLAIMED_RESTARTS gives
+        # its deaths in a row (at once the first time).
         self._unclaimed: dict[uuid.UUID, int] = {}  # job -> its processes that died before the claim, in a row
         self._later: dict[uuid.UUID, tuple[float, str]] = {}  # job -> when it goes back in line (monotonic), its kind
         self._lock = threading.Lock()
@@ -541,10 +538,10 @@ class ProcessDispatcher:
         """``job_id``'s process died before it claimed the job, after ``deaths`` such deaths in a row: whether it goes
         back in line now (the first time in a row), or after a pause (see ``_unclaimed``)."""
         deaths = self._unclaimed[job_id] = deaths + 1
-        if deaths == 1:
+        pause = UNCLAIMED_RESTARTS.pause(deaths)
+        if not pause:
             log.error("job %s: its process died before it could claim the job; it starts again", job_id)
             return True
-        pause = min(RETRY_SECONDS * 2 ** (deaths - 2), UNCLAIMED_PAUSE_MAX)
         with self._lock:
             self._later[job_id] = (time.monotonic() + pause, kind)
         log.error("job %s: its process died before it could claim the job, %d times in a row; it starts again in "

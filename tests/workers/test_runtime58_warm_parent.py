@@ -18,6 +18,7 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from plantsolve.jobs import intake
+from plantsolve.jobs.backoff import Backoff
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import SolverSpec
@@ -72,12 +73,11 @@ class _DiesAtStart:
 
 
 @pytest.fixture
-def starts(monkeypatch):
-    """The process's forkserver gate, fresh, with short pauses: 0, 0.05, 0.1, 0.2, 0.4, 0.4 ... s."""
-    gate = intake.FORKSERVER_STARTS
-    for name, value in (("first_pause", 0.05), ("longest", 0.4), ("failures", 0), ("_last", float("-inf")),
-                        ("_due", float("-inf"))):
-        monkeypatch.setattr(gate, name, value)
+def starts(fresh_forkserver_starts, monkeypatch):
+    """The process's forkserver gate, fresh (tests/workers/conftest.py), with short pauses: 0, 0.05, 0.1, 0.2, 0.4,
+    0.4 ... s."""
+    gate = fresh_forkserver_starts
+    monkeypatch.setattr(gate, "backoff", Backoff(first=0.05, longest=0.4))
     _DiesAtStart.starts = []
     return gate
 
@@ -107,7 +107,7 @@ def test_a_warm_parent_that_dies_at_every_start_is_tried_again_ever_later_and_re
 
 def test_an_upload_is_a_503_without_a_forkserver_start_while_its_starts_are_paused(tmp_path, starts, monkeypatch):
     monkeypatch.setattr(forkserver, "ensure_running", lambda: None)  # no readers' forkserver started by the app
-    monkeypatch.setattr(starts, "first_pause", 5.0)
+    monkeypatch.setattr(starts, "backoff", Backoff(first=5.0, longest=30.0))
     forkserver_context = multiprocessing.get_context("forkserver")
     monkeypatch.setattr(forkserver_context, "Process", _DiesAtStart)
     with TestClient(create_app(service_settings(tmp_path))) as client:
@@ -120,7 +120,7 @@ def test_an_upload_is_a_503_without_a_forkserver_start_while_its_starts_are_paus
 
 
 def test_a_job_whose_process_dies_before_its_claim_again_and_again_waits_longer_each_time(ctx, monkeypatch):
-    monkeypatch.setattr(processes, "RETRY_SECONDS", 0.2)
+    monkeypatch.setattr(processes, "UNCLAIMED_RESTARTS", Backoff(first=0.2, longest=30.0))
     dispatcher = ProcessDispatcher(ctx, workers=1)
     job_id = _queued(ctx)
     child = _died_before_its_claim(job_id)

@@ -16,6 +16,7 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from plantsolve.jobs import intake
+from plantsolve.jobs.backoff import Backoff
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import INFRASTRUCTURE
 from plantsolve.jobs.intake import ForkserverStarts
@@ -31,7 +32,7 @@ PLUGINS = ("tests.support.kinds",)
 
 
 def test_a_forkserver_failure_seen_by_several_callers_counts_once():
-    gate = ForkserverStarts(first_pause=1.0, longest=30.0)
+    gate = ForkserverStarts(Backoff(first=1.0, longest=30.0))
     start = gate.current()
     # three uploads waiting on it and the dispatcher see the one death: before, failures=4 and a 4 s pause
     assert [gate.failed(start) for _ in range(4)] == [0.0] * 4 and gate.failures == 1 and gate.pause_left() == 0
@@ -143,7 +144,7 @@ class _DiesAtStart:
 def test_an_upload_during_a_pause_is_refused_before_it_is_stored_and_told_when_to_come_back(
         tmp_path, fresh_forkserver_starts, monkeypatch):
     monkeypatch.setattr(forkserver, "ensure_running", lambda: None)  # no readers' forkserver started by the app
-    monkeypatch.setattr(fresh_forkserver_starts, "first_pause", 12.0)
+    monkeypatch.setattr(fresh_forkserver_starts, "backoff", Backoff(first=12.0, longest=30.0))
     monkeypatch.setattr(multiprocessing.get_context("forkserver"), "Process", _DiesAtStart)
     _DiesAtStart.starts = 0
     app = create_app(service_settings(tmp_path))
