@@ -364,8 +364,7 @@ class ProcessDispatcher:
                     # the ends of job processes killed with the warm parent are judged before the seconds of its start
                     # (its death makes multiprocessing's exit status of theirs unknown; judged after, a lapsed lease
                     # had often taken their attempts first)
-                    if self._running:
-                        self._reap(WARM_DEATH_SECONDS)
+                    self._reap_killed_with_warm_parent()
                     self._warm_up()
                 self._back_in_line()
                 self._launch()
@@ -384,11 +383,20 @@ class ProcessDispatcher:
                 log.exception("job supervisor error")
                 self._stopping.wait(RETRY_SECONDS)
 
-    def _reap(self, timeout: float) -> int:
-        """Wait up to ``timeout`` for a job process's end (or a wake-up) and judge the ends; returns how many."""
+    def _reap_killed_with_warm_parent(self) -> None:
+        """Judge the ends of the job processes that died with the warm parent, as they come, until none runs or
+        ``WARM_DEATH_SECONDS`` passed: an enqueue's wake-up meanwhile does not end the wait (it had left them to be
+        judged after the warm parent's start, their exit status lost)."""
+        until = time.monotonic() + WARM_DEATH_SECONDS
+        while self._running and (left := until - time.monotonic()) > 0:
+            self._reap(left, woken=False)
+
+    def _reap(self, timeout: float, *, woken: bool = True) -> int:
+        """Wait up to ``timeout`` for a job process's end (or, when ``woken``, a wake-up) and judge the ends; returns
+        how many."""
         with self._lock:
             watched = {child.receiver: child for child in self._running.values()}
-        ready = wait([*watched, self._wake_r], timeout=timeout)
+        ready = wait([*watched, *([self._wake_r] if woken else [])], timeout=timeout)
         if self._wake_r in ready:
             os.read(self._wake_r, 4096)
         ended = [watched[r] for r in ready if r in watched]

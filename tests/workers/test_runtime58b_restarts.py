@@ -1,11 +1,13 @@
 """Restarts of the forkserver and of job processes, as seen once (runtime58's review): one forkserver death seen by
 several callers counts once; a hung process killed after the sweep re-queued its job did not die before its claim;
-the count of deaths before the claim ends with any other end."""
+the count of deaths before the claim ends with any other end; an upload during a pause stores nothing; the ends of
+job processes killed with the warm parent are judged before its next start."""
 
 from __future__ import annotations
 
 import multiprocessing
 import signal
+import subprocess
 import threading
 import time
 import uuid
@@ -160,3 +162,45 @@ def test_an_upload_during_a_pause_is_refused_before_it_is_stored_and_told_when_t
     assert len(stored) == 2
     assert said[2].headers["retry-after"] == "12" and said[2].headers["content-type"] == "application/problem+json"
     assert "next start is tried in 12 s" in said[2].json()["detail"]
+
+
+class _Popened:
+    """A job process as the supervisor sees it, run as a plain command: ``sleep``."""
+
+    def __init__(self, popen: subprocess.Popen):
+        self.popen, self.pid = popen, popen.pid
+
+    @property
+    def exitcode(self) -> int | None:
+        return self.popen.poll()
+
+    def join(self, timeout: float) -> None:
+        try:
+            self.popen.wait(timeout)
+        except subprocess.TimeoutExpired:
+            pass
+
+    def kill(self) -> None:
+        self.popen.kill()
+
+
+def test_the_ends_of_job_processes_killed_with_the_warm_parent_are_judged_though_an_enqueue_woke_the_wait(
+        ctx, monkeypatch):
+    monkeypatch.setattr(processes, "WARM_DEATH_SECONDS", 5.0)  # the wait ends once the end is judged, not then
+    dispatcher = ProcessDispatcher(ctx, workers=1)
+    dispatcher._thread = object()  # enqueue refuses while no supervisor runs; none is needed here
+    job_id = _queued(ctx)
+    receiver, sender = multiprocessing.Pipe(duplex=False)
+    # its end reaches the supervisor a little after the wake-up of an enqueue
+    popen = subprocess.Popen(["sleep", "0.05"], pass_fds=[sender.fileno()])
+    sender.close()
+    worker = processes.worker_of(popen.pid)
+    dispatcher._running[job_id] = processes._Running(job_id, _Popened(popen), receiver, worker, None,
+                                                     processes._started(popen.pid), time.monotonic(), None,
+                                                     "test-compute")
+    dispatcher._wake()
+    began = time.monotonic()
+    dispatcher._reap_killed_with_warm_parent()
+    # before: the wake-up ended the wait at once, and this end was judged after the warm parent's start
+    assert dispatcher._running == {} and time.monotonic() - began < 4.0
+    assert list(dispatcher._waiting) == [(job_id, "")]  # judged: died before its claim, back in line at once
