@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import subprocess
+import sys
 import time
 import uuid
 from multiprocessing import forkserver
@@ -97,6 +99,13 @@ def test_a_warm_parent_that_dies_at_every_start_is_tried_again_ever_later_and_re
         assert 5 <= len(tried) <= 10, tried
         gaps = [b - a for a, b in zip(tried, tried[1:])]
         assert gaps[0] < 0.15 and min(gaps[-3:]) >= 0.35, gaps  # at once, then up to the longest pause
+        # a pause that lasts from the next failed start on: ping() cannot fall between its end and the next start
+        # (it said "is starting" then)
+        monkeypatch.setattr(starts, "backoff", Backoff(first=1.0, longest=60.0))
+        counted = starts.current()
+        until = time.monotonic() + 10
+        while starts.current() == counted and time.monotonic() < until:
+            time.sleep(0.01)
         with pytest.raises(RuntimeError, match=r"warm parent failed \d+ start\(s\) in a row; the next in"):
             dispatcher.ping()
         # the job is held, not started (a start would start the warm parent before its pause) and not lost
@@ -171,3 +180,24 @@ def test_a_job_process_whose_warm_parent_died_too_is_not_said_to_have_exited_wit
     how = "the job process died, how is not known (its exit status was lost: the process that reports it died too)"
     assert [(a["outcome"], a["error"]) for a in job.attempts] == [("lost", how)]
     assert "255" not in job.report["message"]
+
+
+def test_a_job_process_whose_warm_parent_lives_keeps_its_exit_code_255(ctx):
+    dispatcher = ProcessDispatcher(ctx, workers=1)
+    job_id = _queued(ctx)
+    worker = processes.worker_of(4_000_000)  # no such process
+    assert ctx.repo.claim(job_id, lease_seconds=60, worker=worker) == 1
+    # a running forkserver of this process, as is_warm_parent knows one (its command line), without its imports
+    warm_parent = subprocess.Popen([sys.executable, "-c", "from multiprocessing.forkserver import main; "
+                                    "import time; time.sleep(60)"])
+    try:
+        assert processes.is_warm_parent(warm_parent.pid)
+        child = processes._Running(job_id, _Ended(4_000_000), None, worker, None, None, time.monotonic(),
+                                   warm_parent.pid)
+        assert dispatcher._judge_end(child, None) is True
+    finally:
+        warm_parent.kill()
+        warm_parent.wait()
+    # the warm parent reported it: the code is the job process's own
+    job = ctx.repo.get(job_id)
+    assert [(a["outcome"], a["error"]) for a in job.attempts] == [("lost", "the job process exited with code 255")]
