@@ -167,8 +167,12 @@ class PrivateCluster:
         shutil.chown(self.folder, "postgres")
         self.port = free_port()
         self.admin = f"postgresql://postgres@127.0.0.1:{self.port}/postgres"
-        self._as_postgres(["initdb", "-D", str(self.folder / "data"), "-A", "trust", "-U", "postgres"])
-        self.start()
+        try:
+            self._as_postgres(["initdb", "-D", str(self.folder / "data"), "-A", "trust", "-U", "postgres"])
+            self.start()
+        except BaseException:
+            self.remove()
+            raise
 
     def _as_postgres(self, argv: list[str]) -> None:
         subprocess.run(["su", "postgres", "-c", " ".join(shlex.quote(arg) for arg in argv)], check=True,
@@ -334,7 +338,12 @@ class ScaledService:
 def scaled_scenario(name: str, code: Path) -> dict:
     work = Path(tempfile.mkdtemp(prefix=f"scaled-{name}-"))
     cluster = PrivateCluster() if name == "pg-restart" else None
-    service = ScaledService(code, work, cluster)
+    try:
+        service = ScaledService(code, work, cluster)
+    except BaseException:  # (its close() removes the cluster, once there is a service to close)
+        if cluster is not None:
+            cluster.remove()
+        raise
     note = ""
     try:
         if name in ("worker-kill", "worker-stop"):

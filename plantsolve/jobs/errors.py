@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import re
 import sys
 from typing import Any, Iterable, Sequence
@@ -88,6 +89,21 @@ class DiskSpaceLow(ProblemError):
         super().__init__(detail or "The service's disk is short of free space, so no submission is taken now (nothing "
                          "was stored; the jobs already queued wait, none is lost). Submit again once space is freed.",
                          headers={"Retry-After": str(DISK_RETRY_AFTER_SECONDS)})
+
+
+class ReadersPaused(ProblemError):
+    """The forkserver that reading processes fork from failed its starts again and again, and the next is paused
+    (:class:`~plantsolve.jobs.intake.ForkserverStarts`): a submission read in such a process (an upload, a large JSON
+    body) is refused before anything of it is stored, asked to come back when the pause ends. The same type as the
+    API's other 503s (a service it needs is away)."""
+
+    status, title, slug = 503, "Service unavailable", "unavailable"
+
+    def __init__(self, failures: int, seconds_left: float):
+        wait = max(1, math.ceil(seconds_left))
+        super().__init__(f"Uploaded files are read in processes whose server failed {failures} start(s) in a row; the "
+                         f"next start is tried in {wait} s, so nothing of this request was stored. Submit it again "
+                         f"after Retry-After seconds.", headers={"Retry-After": str(wait)})
 
 
 def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = (),

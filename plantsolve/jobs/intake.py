@@ -42,7 +42,9 @@ from typing import Any, Callable, Iterable, Iterator
 
 from pydantic import ValidationError
 
+from plantsolve.jobs.backoff import FORKSERVER_RESTARTS, Backoff
 from plantsolve.jobs.errors import (
+    ReadersPaused,
     Unprocessable,
     UnsupportedMediaType,
     array_bounds,
@@ -183,18 +185,21 @@ _forkserver = multiprocessing.get_context("forkserver")
 READER_STARTS = ("forkserver", "fork")
 
 
-# What the forkserver imports when it starts, in the order first asked for. It is one per process (multiprocessing's):
-# the upload readers fork from it and so do the embedded service's job processes (plantsolve.workers.processes), so
-# each adds its modules and neither replaces the other's (the readers' list, set after the job processes' one, had
-# left the warm parent without a single solver: each job process imported its kind's solver itself).
+# What the forkserver imports when it starts, in order. It is one per process (multiprocessing's): the upload readers
+# fork from it and so do the embedded service's job processes (plantsolve.workers.processes), so each adds its modules
+# and neither replaces the other's (the readers' list, set after the job processes' one, had left the warm parent
+# without a single solver: each job process imported its kind's solver itself).
 _preloaded: dict[str, None] = {}
 
 
-def preload_in_forkserver(modules: Iterable[str]) -> list[str]:
-    """Add ``modules`` to what the forkserver imports at its next start; returns the whole list."""
-    _preloaded.update(dict.fromkeys(modules))
+def preload_in_forkserver(modules: Iterable[str], *, first: bool = False) -> None:
+    """Add ``modules`` to what the forkserver imports at its next start: after those already listed, or before them
+    when ``first`` (a module that must run before the others import theirs, whoever asked first)."""
+    added = dict.fromkeys(modules)
+    merged = {**added, **_preloaded} if first else {**_preloaded, **added}
+    _preloaded.clear()
+    _preloaded.update(merged)
     _forkserver.set_forkserver_preload(list(_preloaded))
-    return list(_preloaded)
 
 
 class ForkserverStarts:
@@ -202,23 +207,35 @@ class ForkserverStarts:
     it first starts it: the job processes' dispatcher (it is their warm parent) or an upload's reading process. One
     that dies at every start (the out-of-memory killer, a library that crashes at import) costs each start the imports
     of every kind: the dispatcher tried again every second, and each upload started one of its own, for as long as
-    the cause lasted. Now the first failure is tried again at once, the next after ``first_pause``, then twice as long
-    each time up to ``longest``; a failure more than ``apart`` seconds after the one before counts as a first."""
+    the cause lasted. Now the starts after failures in a row wait as ``backoff`` says (the first failure is tried
+    again at once); a failure more than ``apart`` seconds after the one before counts as a first.
 
-    def __init__(self, first_pause: float = 1.0, longest: float = 30.0, apart: float = 60.0):
-        self.first_pause, self.longest, self.apart = first_pause, longest, apart
+    One death is seen by every caller that used that forkserver (the uploads waiting on it, the dispatcher): each
+    takes :meth:`current` before its start and passes it to :meth:`failed`, which counts a start's failure once."""
+
+    def __init__(self, backoff: Backoff = FORKSERVER_RESTARTS, apart: float = 60.0):
+        self.backoff, self.apart = backoff, apart
         self.failures = 0
+        self._start = 0  # the forkserver start callers use now: one more after each failure counted
         self._last = float("-inf")  # the last failure (monotonic)
         self._due = float("-inf")  # when the next start may be tried (monotonic)
         self._lock = threading.Lock()
 
-    def failed(self) -> float:
-        """A start failed, or the forkserver died: returns the pause before the next start."""
+    def current(self) -> int:
+        """The forkserver start a caller is about to use (or wait on): what it passes to :meth:`failed`."""
+        return self._start
+
+    def failed(self, start: int) -> float:
+        """Forkserver start ``start`` (:meth:`current`) failed, or the forkserver died: returns the pause before the
+        next start. Its failure counts once, however many callers saw it."""
         with self._lock:
             now = time.monotonic()
+            if start != self._start:  # another caller counted it already
+                return max(0.0, self._due - now)
+            self._start += 1
             self.failures = self.failures + 1 if now - self._last < self.apart else 1
             self._last = now
-            pause = 0.0 if self.failures == 1 else min(self.first_pause * 2 ** (self.failures - 2), self.longest)
+            pause = self.backoff.pause(self.failures)
             self._due = now + pause
             return pause
 
@@ -227,11 +244,11 @@ class ForkserverStarts:
         return max(0.0, self._due - time.monotonic())
 
     def refuse_while_paused(self) -> None:
-        """Raise (an infrastructure failure: a 503) while a start may not be tried."""
+        """Raise :class:`~plantsolve.jobs.errors.ReadersPaused` (a 503 asking to come back when the pause ends) while
+        a start may not be tried."""
         left = self.pause_left()
         if left > 0:
-            raise ConnectionRefusedError(f"the forkserver failed {self.failures} start(s) in a row; the next may be "
-                                         f"tried in {left:.1f} s")
+            raise ReadersPaused(self.failures, left)
 
 
 FORKSERVER_STARTS = ForkserverStarts()
@@ -318,6 +335,7 @@ def _bounded(spec: SolverSpec, what: str, source: StoredInput, options: dict | N
         spec.preload(SolverSpec.READERS)  # here, so the child imports nothing under its memory limit
     if start == "forkserver":
         FORKSERVER_STARTS.refuse_while_paused()
+        forkserver_start = FORKSERVER_STARTS.current()
     context = multiprocessing.get_context(start)
     receiver, sender = context.Pipe(duplex=False)
     process = context.Process(
@@ -328,7 +346,7 @@ def _bounded(spec: SolverSpec, what: str, source: StoredInput, options: dict | N
     except Exception:
         receiver.close()
         if start == "forkserver":
-            FORKSERVER_STARTS.failed()
+            FORKSERVER_STARTS.failed(forkserver_start)
         raise
     finally:
         sender.close()

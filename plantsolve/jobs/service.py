@@ -105,7 +105,7 @@ class JobService:
         A large request (more than ``INLINE_INPUT_BYTES``) is stored as it came and read and checked from its file in
         a bounded process, as an upload is: this process holds its bytes, never the objects made of them."""
         spec = self.spec(kind)
-        self.has_room(idempotency_key, owner)
+        self.has_room(idempotency_key, owner, read_bounded=not self.stores_inline(len(body)))
         job_id = uuid.uuid4()
         if not self.stores_inline(len(body)):
             blob = self.ctx.files.put(f"{job_id}/input/request.json", body)
@@ -125,11 +125,17 @@ class JobService:
             fields = {"input_kind": "json", "input": raw}
         return NewJob(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
 
-    def has_room(self, idempotency_key: str | None = None, owner: str = "") -> None:
+    def has_room(self, idempotency_key: str | None = None, owner: str = "", *, read_bounded: bool = False) -> None:
         """Raise :class:`DiskSpaceLow` (503) while the service's disk is below ``MIN_FREE_DISK_BYTES``: a submission
         then is refused, as readiness says ``disk``, rather than taken while no job starts
         (:mod:`plantsolve.jobs.holds`) or into a store that may not hold it. A repeated request whose
-        ``idempotency_key`` names a stored job stores nothing new: it is answered with that job (or its conflict)."""
+        ``idempotency_key`` names a stored job stores nothing new: it is answered with that job (or its conflict).
+
+        ``read_bounded``: the submission is to be read in a bounded process. While their forkserver's starts are paused
+        it raises :class:`~plantsolve.jobs.errors.ReadersPaused` (503, ``Retry-After`` the pause left) now, before the
+        submission is hashed and stored only to be deleted."""
+        if read_bounded and self._reader_start == "forkserver":
+            intake.FORKSERVER_STARTS.refuse_while_paused()
         why = disk_low(self.ctx)
         if why is None:
             return
@@ -167,7 +173,7 @@ class JobService:
             if existing is not None:
                 return self.stored(NewJob(spec, existing.id, digest.hexdigest(), idempotency_key, {}, owner),
                                    existing, False)
-        self.has_room()  # the key, if any, names no job: this request would store its upload
+        self.has_room(read_bounded=True)  # the key, if any, names no job: this request would store its upload
         job_id = uuid.uuid4()
         # stored first: the upload is read (and checked) from its file, in a bounded process, not in this one
         blob = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)

@@ -28,6 +28,7 @@ from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Iterable
 
+from plantsolve.jobs.backoff import UNCLAIMED_RESTARTS
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.holds import DiskHold
 from plantsolve.jobs.intake import FORKSERVER_STARTS, preload_in_forkserver
@@ -54,8 +55,6 @@ RETRY_SECONDS = 1.0
 STALL_SECONDS = 10.0
 # how long the ends of job processes killed with the warm parent may take to reach the supervisor (see _supervise)
 WARM_DEATH_SECONDS = 0.2
-# the longest pause before a job whose process died before its claim, again and again, starts again (see _unclaimed)
-UNCLAIMED_PAUSE_MAX = 30.0
 
 _warm = multiprocessing.get_context("forkserver")
 
@@ -190,6 +189,7 @@ class _Running:
     started: str | None  # see _started: read right after the start, while the process is surely this job's
     began: float  # monotonic
     warm: int | None  # the warm parent it was forked from: it reports the process's exit status
+    kind: str = ""  # its job's kind, when known
     killed_at_limit: bool = False
     abandoned: bool = False  # killed because its attempt had ended (see jobs.leases.abandoned)
 
@@ -219,10 +219,8 @@ class ProcessDispatcher:
         self._running: dict[uuid.UUID, _Running] = {}
         self._waiting: deque[tuple[uuid.UUID, str]] = deque()
         self._starting: uuid.UUID | None = None  # taken from the line, its process not started yet
-        # A job whose process died before it claimed the job (nothing of it ran, no attempt counted) goes back in line
-        # at once the first time, after a pause doubling with each such death in a row after that (up to
-        # UNCLAIMED_PAUSE_MAX): a process killed at every start (a watchdog, the out-of-memory killer, a database job
-        # processes cannot open) was started again at once, hundreds of times a minute, for as long as the cause lasted.
+        # A job whose process died before it claimed the job goes back in line after the pause UNCLAIMED_RESTARTS gives
+        # its deaths in a row (at once the first time).
         self._unclaimed: dict[uuid.UUID, int] = {}  # job -> its processes that died before the claim, in a row
         self._later: dict[uuid.UUID, tuple[float, str]] = {}  # job -> when it goes back in line (monotonic), its kind
         self._lock = threading.Lock()
@@ -232,6 +230,7 @@ class ProcessDispatcher:
         self._thread: threading.Thread | None = None
         self._start_watch: threading.Thread | None = None
         self._warm_parent: int | None = None  # its pid once a fork has come back from it
+        self._warm_start = FORKSERVER_STARTS.current()  # the forkserver start it is (see ForkserverStarts.failed)
         self._warm_since = 0.0  # when it came up (monotonic)
         self._start_failed: str | None = None
         self._start_began: float | None = None  # when the start of a job process under way began (monotonic)
@@ -243,8 +242,9 @@ class ProcessDispatcher:
         self._disk = DiskHold(ctx)
         settings = JobSettings.model_validate(ctx.settings.model_dump(include=set(JobSettings.model_fields)))
         self._settings_json = settings.model_dump_json()
-        # before anything starts the forkserver (the upload readers share it, adding theirs): it imports all a job needs
-        preload_in_forkserver(warm_modules(ctx.kinds.values(), ctx.settings.plugins))
+        # before anything starts the forkserver (the upload readers share it, adding theirs): it imports all a job needs,
+        # this module first (see warm_modules) even when an upload reader's list was set before
+        preload_in_forkserver(warm_modules(ctx.kinds.values(), ctx.settings.plugins), first=True)
 
     # ---- the dispatcher protocol ----------------------------------------------------------------
 
@@ -276,6 +276,7 @@ class ProcessDispatcher:
             self._running.clear()
             self._waiting.clear()
             self._later.clear()
+            self._unclaimed.clear()
         for child in running:
             try:
                 handed_back(self.ctx, child.job_id)
@@ -363,8 +364,7 @@ class ProcessDispatcher:
                     # the ends of job processes killed with the warm parent are judged before the seconds of its start
                     # (its death makes multiprocessing's exit status of theirs unknown; judged after, a lapsed lease
                     # had often taken their attempts first)
-                    if self._running:
-                        self._reap(WARM_DEATH_SECONDS)
+                    self._reap_killed_with_warm_parent()
                     self._warm_up()
                 self._back_in_line()
                 self._launch()
@@ -383,11 +383,20 @@ class ProcessDispatcher:
                 log.exception("job supervisor error")
                 self._stopping.wait(RETRY_SECONDS)
 
-    def _reap(self, timeout: float) -> int:
-        """Wait up to ``timeout`` for a job process's end (or a wake-up) and judge the ends; returns how many."""
+    def _reap_killed_with_warm_parent(self) -> None:
+        """Judge the ends of the job processes that died with the warm parent, as they come, until none runs or
+        ``WARM_DEATH_SECONDS`` passed: an enqueue's wake-up meanwhile does not end the wait (it had left them to be
+        judged after the warm parent's start, their exit status lost)."""
+        until = time.monotonic() + WARM_DEATH_SECONDS
+        while self._running and (left := until - time.monotonic()) > 0:
+            self._reap(left, woken=False)
+
+    def _reap(self, timeout: float, *, woken: bool = True) -> int:
+        """Wait up to ``timeout`` for a job process's end (or, when ``woken``, a wake-up) and judge the ends; returns
+        how many."""
         with self._lock:
             watched = {child.receiver: child for child in self._running.values()}
-        ready = wait([*watched, self._wake_r], timeout=timeout)
+        ready = wait([*watched, *([self._wake_r] if woken else [])], timeout=timeout)
         if self._wake_r in ready:
             os.read(self._wake_r, 4096)
         ended = [watched[r] for r in ready if r in watched]
@@ -409,32 +418,34 @@ class ProcessDispatcher:
         learn its pid: from then on a job starts in milliseconds. A start that fails is tried again later
         (:class:`~plantsolve.jobs.intake.ForkserverStarts`)."""
         started = time.monotonic()
+        forkserver_start = FORKSERVER_STARTS.current()
         receiver, sender = _warm.Pipe(duplex=False)
         try:
             probe = _warm.Process(target=_parent_pid, args=(sender,), daemon=True, name="warm-probe")
             probe.start()
             sender.close()
             self._warm_parent = receiver.recv()
+            self._warm_start = forkserver_start
             probe.join(5)
             self._start_failed = None
             self._warm_since = time.monotonic()
             log.info("job processes ready: warm parent %d up in %.1f s", self._warm_parent, time.monotonic() - started)
         except Exception as error:
             self._start_failed = type(error).__name__
-            self._warm_failed(f"could not be started ({error})")
+            self._warm_failed(f"could not be started ({error})", forkserver_start)
         finally:
             sender.close()
             receiver.close()
 
     def _warm_died(self) -> None:
         self._warm_parent = None
-        self._warm_failed(f"died {time.monotonic() - self._warm_since:.1f} s after it came up")
+        self._warm_failed(f"died {time.monotonic() - self._warm_since:.1f} s after it came up", self._warm_start)
 
-    def _warm_failed(self, what: str) -> None:
+    def _warm_failed(self, what: str, forkserver_start: int) -> None:
         """A failed start of the warm parent, or its death: started again at once the first time, after a pause that
         doubles with each failure in a row after that (:class:`~plantsolve.jobs.intake.ForkserverStarts`); the jobs
         stay queued meanwhile and readiness says no job can start."""
-        pause = FORKSERVER_STARTS.failed()
+        pause = FORKSERVER_STARTS.failed(forkserver_start)
         log.error("the job processes' warm parent %s (%d time(s) in a row); %s", what, FORKSERVER_STARTS.failures,
                   f"the next start in {pause:g} s, queued jobs waiting" if pause else "starting it again")
 
@@ -482,7 +493,8 @@ class ProcessDispatcher:
             deadline = time.monotonic() + self.ctx.limits(spec)[1] + HARD_LIMIT_GRACE if spec is not None else None
             with self._lock:
                 self._running[job_id] = _Running(job_id, process, receiver, worker_of(process.pid), deadline,
-                                                 _started(process.pid), time.monotonic(), self._warm_parent)
+                                                 _started(process.pid), time.monotonic(), self._warm_parent,
+                                                 spec.kind if spec is not None else kind)
                 self._starting = None
 
     def _start_stalled(self) -> bool:
@@ -530,17 +542,16 @@ class ProcessDispatcher:
         if again:
             self.enqueue(child.job_id)
 
-    def _died_unclaimed(self, job_id: uuid.UUID) -> bool:
-        """``job_id``'s process died before it claimed the job: whether it goes back in line now (the first time in a
-        row), or after a pause (see ``_unclaimed``)."""
-        deaths = self._unclaimed[job_id] = self._unclaimed.get(job_id, 0) + 1
-        if deaths == 1:
+    def _died_unclaimed(self, job_id: uuid.UUID, kind: str, deaths: int) -> bool:
+        """``job_id``'s process died before it claimed the job, after ``deaths`` such deaths in a row: whether it goes
+        back in line now (the first time in a row), or after a pause (see ``_unclaimed``)."""
+        deaths = self._unclaimed[job_id] = deaths + 1
+        pause = UNCLAIMED_RESTARTS.pause(deaths)
+        if not pause:
             log.error("job %s: its process died before it could claim the job; it starts again", job_id)
             return True
-        pause = min(RETRY_SECONDS * 2 ** (deaths - 2), UNCLAIMED_PAUSE_MAX)
-        job = self.ctx.repo.get(job_id, brief=True)
         with self._lock:
-            self._later[job_id] = (time.monotonic() + pause, job.kind if job is not None else "")
+            self._later[job_id] = (time.monotonic() + pause, kind)
         log.error("job %s: its process died before it could claim the job, %d times in a row; it starts again in "
                   "%.0f s (no attempt counted)", job_id, deaths, pause)
         return False
@@ -548,6 +559,7 @@ class ProcessDispatcher:
     def _judge_end(self, child: _Running, outcome: str | None) -> bool:
         """Write how ``child``'s attempt ended, when its process did not (killed at the hard limit, died); returns
         whether its job goes back in line."""
+        deaths = self._unclaimed.pop(child.job_id, 0)  # kept again only by another death before the claim
         if outcome is None:
             try:
                 remove_temporaries(self.ctx, child.job_id, child.process.pid)
@@ -567,14 +579,15 @@ class ProcessDispatcher:
                 # with it, say): the job process's own status is not known, and was most often a signal, not 255
                 exitcode = None
             fate = process_died(self.ctx, child.job_id, child.worker, exitcode)
+            if child.abandoned:
+                # killed here after the sweep took its attempt back (queued again, counted): not a death before the
+                # claim, whatever the row says now
+                return fate in ("requeued", "queued")
             if fate == "queued":
-                return self._died_unclaimed(child.job_id)
-            self._unclaimed.pop(child.job_id, None)
-            if not child.abandoned:
-                log.error("job %s: its process died (exit code %s); the job is %s", child.job_id,
-                          "unknown" if exitcode is None else exitcode, fate)
+                return self._died_unclaimed(child.job_id, child.kind, deaths)
+            log.error("job %s: its process died (exit code %s); the job is %s", child.job_id,
+                      "unknown" if exitcode is None else exitcode, fate)
             return fate == "requeued"
-        self._unclaimed.pop(child.job_id, None)
         return outcome == "requeued"
 
     def _enforce_deadlines(self) -> None:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import subprocess
+import sys
 import time
 import uuid
 from multiprocessing import forkserver
@@ -18,6 +20,7 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from plantsolve.jobs import intake
+from plantsolve.jobs.backoff import Backoff
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import SolverSpec
@@ -40,6 +43,10 @@ def _queued(ctx) -> uuid.UUID:
 
 def test_the_warm_parent_imports_every_kinds_solver_and_the_upload_readers(tmp_path, monkeypatch):
     monkeypatch.setattr(forkserver, "ensure_running", lambda: None)  # the list is the point, not a started server
+    # as an earlier test of this process leaves it: the readers' list asked for first (a service without job processes)
+    monkeypatch.setattr(intake, "_preloaded", {})
+    monkeypatch.setattr(forkserver._forkserver, "_preload_modules", list(forkserver._forkserver._preload_modules))
+    intake.preload_in_forkserver(["plantsolve.jobs.intake", "plantsolve.solvers.tube.upload"])
     app = create_app(service_settings(tmp_path, embedded_mode="process"))
     ctx = app.state.jobs.ctx
     preload = forkserver._forkserver._preload_modules
@@ -48,7 +55,8 @@ def test_the_warm_parent_imports_every_kinds_solver_and_the_upload_readers(tmp_p
     readers = [module for spec in ctx.kinds.values() for module in spec.modules(SolverSpec.READERS)]
     assert set(warm_modules(ctx.kinds.values(), ctx.settings.plugins)) <= set(preload)
     assert {"plantsolve.solvers.tube.solve", "tests.support.kinds", *solvers, *readers} <= set(preload)
-    # the module that limits the numeric libraries to a thread each is imported before any of them
+    # the module that limits the numeric libraries to a thread each is imported before any of them, whoever asked first
+    # (before: the readers' modules came first when they had been asked for first)
     assert preload[0] == "plantsolve.workers.processes"
     ctx.close()
 
@@ -67,12 +75,11 @@ class _DiesAtStart:
 
 
 @pytest.fixture
-def starts(monkeypatch):
-    """The process's forkserver gate, fresh, with short pauses: 0, 0.05, 0.1, 0.2, 0.4, 0.4 ... s."""
-    gate = intake.FORKSERVER_STARTS
-    for name, value in (("first_pause", 0.05), ("longest", 0.4), ("failures", 0), ("_last", float("-inf")),
-                        ("_due", float("-inf"))):
-        monkeypatch.setattr(gate, name, value)
+def starts(fresh_forkserver_starts, monkeypatch):
+    """The process's forkserver gate, fresh (tests/workers/conftest.py), with short pauses: 0, 0.05, 0.1, 0.2, 0.4,
+    0.4 ... s."""
+    gate = fresh_forkserver_starts
+    monkeypatch.setattr(gate, "backoff", Backoff(first=0.05, longest=0.4))
     _DiesAtStart.starts = []
     return gate
 
@@ -92,6 +99,13 @@ def test_a_warm_parent_that_dies_at_every_start_is_tried_again_ever_later_and_re
         assert 5 <= len(tried) <= 10, tried
         gaps = [b - a for a, b in zip(tried, tried[1:])]
         assert gaps[0] < 0.15 and min(gaps[-3:]) >= 0.35, gaps  # at once, then up to the longest pause
+        # a pause that lasts from the next failed start on: ping() cannot fall between its end and the next start
+        # (it said "is starting" then)
+        monkeypatch.setattr(starts, "backoff", Backoff(first=1.0, longest=60.0))
+        counted = starts.current()
+        until = time.monotonic() + 10
+        while starts.current() == counted and time.monotonic() < until:
+            time.sleep(0.01)
         with pytest.raises(RuntimeError, match=r"warm parent failed \d+ start\(s\) in a row; the next in"):
             dispatcher.ping()
         # the job is held, not started (a start would start the warm parent before its pause) and not lost
@@ -102,7 +116,7 @@ def test_a_warm_parent_that_dies_at_every_start_is_tried_again_ever_later_and_re
 
 def test_an_upload_is_a_503_without_a_forkserver_start_while_its_starts_are_paused(tmp_path, starts, monkeypatch):
     monkeypatch.setattr(forkserver, "ensure_running", lambda: None)  # no readers' forkserver started by the app
-    monkeypatch.setattr(starts, "first_pause", 5.0)
+    monkeypatch.setattr(starts, "backoff", Backoff(first=5.0, longest=30.0))
     forkserver_context = multiprocessing.get_context("forkserver")
     monkeypatch.setattr(forkserver_context, "Process", _DiesAtStart)
     with TestClient(create_app(service_settings(tmp_path))) as client:
@@ -115,14 +129,15 @@ def test_an_upload_is_a_503_without_a_forkserver_start_while_its_starts_are_paus
 
 
 def test_a_job_whose_process_dies_before_its_claim_again_and_again_waits_longer_each_time(ctx, monkeypatch):
-    monkeypatch.setattr(processes, "RETRY_SECONDS", 0.2)
+    monkeypatch.setattr(processes, "UNCLAIMED_RESTARTS", Backoff(first=0.2, longest=30.0))
     dispatcher = ProcessDispatcher(ctx, workers=1)
     job_id = _queued(ctx)
+    child = _died_before_its_claim(job_id)
     # the first death in a row: back in line at once (a one-off kill mid-fork costs nothing)
-    assert dispatcher._died_unclaimed(job_id) is True
+    assert dispatcher._judge_end(child, None) is True
     for pause in (0.2, 0.4, 0.8):  # before: started again at once, each time
         before = time.monotonic()
-        assert dispatcher._died_unclaimed(job_id) is False
+        assert dispatcher._judge_end(child, None) is False
         due = dispatcher._later[job_id][0]
         assert before + pause <= due <= time.monotonic() + pause
     assert dispatcher._later[job_id][1] == "test-compute"
@@ -144,6 +159,13 @@ class _Ended:
         self.pid, self.exitcode = pid, 255
 
 
+def _died_before_its_claim(job_id: uuid.UUID) -> processes._Running:
+    """A job process of ``job_id`` (a queued job) that ended without a word."""
+    worker = processes.worker_of(4_000_000)  # no such process
+    return processes._Running(job_id, _Ended(4_000_000), None, worker, None, None, time.monotonic(), None,
+                              "test-compute")
+
+
 def test_a_job_process_whose_warm_parent_died_too_is_not_said_to_have_exited_with_code_255(ctx):
     dispatcher = ProcessDispatcher(ctx, workers=1)
     job_id = _queued(ctx)
@@ -158,3 +180,24 @@ def test_a_job_process_whose_warm_parent_died_too_is_not_said_to_have_exited_wit
     how = "the job process died, how is not known (its exit status was lost: the process that reports it died too)"
     assert [(a["outcome"], a["error"]) for a in job.attempts] == [("lost", how)]
     assert "255" not in job.report["message"]
+
+
+def test_a_job_process_whose_warm_parent_lives_keeps_its_exit_code_255(ctx):
+    dispatcher = ProcessDispatcher(ctx, workers=1)
+    job_id = _queued(ctx)
+    worker = processes.worker_of(4_000_000)  # no such process
+    assert ctx.repo.claim(job_id, lease_seconds=60, worker=worker) == 1
+    # a running forkserver of this process, as is_warm_parent knows one (its command line), without its imports
+    warm_parent = subprocess.Popen([sys.executable, "-c", "from multiprocessing.forkserver import main; "
+                                    "import time; time.sleep(60)"])
+    try:
+        assert processes.is_warm_parent(warm_parent.pid)
+        child = processes._Running(job_id, _Ended(4_000_000), None, worker, None, None, time.monotonic(),
+                                   warm_parent.pid)
+        assert dispatcher._judge_end(child, None) is True
+    finally:
+        warm_parent.kill()
+        warm_parent.wait()
+    # the warm parent reported it: the code is the job process's own
+    job = ctx.repo.get(job_id)
+    assert [(a["outcome"], a["error"]) for a in job.attempts] == [("lost", "the job process exited with code 255")]
