@@ -101,9 +101,9 @@ class ReadersPaused(ProblemError):
 
     def __init__(self, failures: int, seconds_left: float):
         wait = max(1, math.ceil(seconds_left))
-        super().__init__(f"Uploaded files are read in processes whose server failed {failures} start(s) in a row; the "
-                         f"next start is tried in {wait} s, so nothing of this request was stored. Submit it again "
-                         f"after Retry-After seconds.", headers={"Retry-After": str(wait)})
+        super().__init__(f"Uploaded files and large JSON bodies are read in processes whose server failed {failures} "
+                         f"start(s) in a row; the next start is tried in {wait} s, so nothing of this request was "
+                         f"stored. Submit it again after Retry-After seconds.", headers={"Retry-After": str(wait)})
 
 
 def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = (),
