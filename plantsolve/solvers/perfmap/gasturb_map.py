@@ -39,7 +39,7 @@ import pint
 
 from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
-from plantsolve.solvers.perfmap.plausibility import named_as_speed
+from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity
 from plantsolve.solvers.skipped_input import truncated_file

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.perfmap.setting_lines import Repeat, Setting
+from plantsolve.solvers.perfmap.speed_names import named_as_speed
 
 REPEAT_DISAGREEMENT = 0.05  # (max - min) / mean of the pressures or the efficiencies at one flow
 MAX_NAMED = 10
@@ -45,26 +46,47 @@ def disagreeing_repeats(settings: list[Setting], rows_of: list[list[int]] | None
         details={"count": len(found), "threshold": REPEAT_DISAGREEMENT, "groups": groups})]
 
 
+def _speed_index(names: tuple[str, ...]) -> int:
+    """The setting that is the speed: the one named as a speed, else the last (the exports' reading)."""
+    return next((k for k, n in enumerate(names) if named_as_speed(n)), len(names) - 1)
+
+
+def _key(s: Setting, speed: int) -> bytes:
+    """The geometry (every setting but the speed) and the measured points of a line."""
+    geometry = s.values[:speed] + s.values[speed + 1:]
+    return repr(geometry).encode() + b"".join(v.tobytes() for v in (s.x, s.y, s.eta))
+
+
 def identical_lines(settings: list[Setting], rows_of: list[list[int]] | None = None,
-                    row_label: str = "line") -> list[Diagnostic]:
-    """One ``setting_lines_identical`` warning naming two lines of one geometry (settings alike but the last, the
-    speed) whose measured points are the same points, flow, pressure and efficiency alike: a rig measures two
-    speeds to two lines, so one line pasted a second time under the next speed is what that is, and the map was
-    built with the true line lost. Identical planes of another geometry setting are no mistake: pyCycle's maps
-    without variable geometry repeat their table at a second alpha."""
+                    row_label: str = "line", lines_of: list[tuple[int, int]] | None = None) -> list[Diagnostic]:
+    """One ``setting_lines_identical`` warning naming two lines of one geometry (settings alike but the speed, the
+    one named as a speed, else the last) whose measured points are the same points, flow, pressure and efficiency
+    alike: a rig measures two speeds to two lines, so one line pasted a second time under the next speed is what
+    that is, and the map was built with the true line lost. Identical planes of another geometry setting are no
+    mistake: pyCycle's maps without variable geometry repeat their table at a second alpha, so a pair is named once
+    however many planes repeat it (``lines_of[i]``: the first and last file line of position i, for a map file)."""
+    if not settings:
+        return []
+    speed = _speed_index(settings[0].names)
     seen: dict[bytes, Setting] = {}
-    pairs = []
+    pairs, tables = [], set()
     for s in settings:
-        key = repr(s.values[:-1]).encode() + b"".join(v.tobytes() for v in (s.x, s.y, s.eta))
-        if key in seen:
-            pairs.append((seen[key], s))
-        else:
+        key = _key(s, speed)
+        if key not in seen:
             seen[key] = s
+            continue
+        table = b"".join(v.tobytes() for v in (s.x, s.y, s.eta))
+        if table not in tables:  # the same pair in a repeated geometry plane is one mistake
+            tables.add(table)
+            pairs.append((seen[key], s))
 
     def where(s: Setting) -> str:
         if rows_of and s.source_index < len(rows_of):
             rows = rows_of[s.source_index]
             return f"{row_label}s {rows[0]}..{rows[-1]}"
+        if lines_of and s.source_index < len(lines_of):
+            first, last = lines_of[s.source_index]
+            return f"lines {first}..{last}"
         return f"positions[{s.source_index}]"
 
     if not pairs:

@@ -13,7 +13,8 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
-from plantsolve.solvers.perfmap.plausibility import named_as_speed, plausibility_warnings
+from plantsolve.solvers.perfmap.plausibility import plausibility_warnings
+from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.repeats import disagreeing_repeats, identical_lines
 from plantsolve.solvers.perfmap.setting_lines import Setting, prepare
 from plantsolve.solvers.perfmap.units import (
