@@ -1352,7 +1352,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         refuse_other_kind(body, "perfmap")
         form = form_beside(body, options, FORM)
         origin = {"format": "json", "document": "positions" if _bare_list(text) else "request"}
-        own = body.get("source", {})
+        own = body.get("source")
+        own = {} if own is None else own  # a null source is none: the reader's is stated
         if isinstance(own, dict):  # anything else is refused naming file.source
             body = {**body, "source": {**own, **origin}}
         return _validated(_with_units_option(body, form.units, "JSON request"), form, origin=origin)

@@ -66,6 +66,8 @@ def load(request: PerfmapRequest, source: StoredInput | None = None) -> PerfmapI
         if source is None and not (request.source and request.source.rows):
             raise
         where = request.source.model_dump() if request.source else {}
+        if source is None:  # a client's body: only the upload reader says where the form or the file put a value
+            where = {k: v for k, v in where.items() if k not in ("form", "document")}
         raise InputRejected([placed(e, where, request.setting_values) for e in error.errors]) from None
 
 
@@ -100,7 +102,7 @@ def placed(error: FieldError, source: dict[str, Any], setting_of: Callable[[int]
     path = ".".join(map(str, loc))
     if (form := (source.get("form") or {}).get(".".join(map(str, loc[:2])))) is not None:
         at = (*form, *loc[2:])
-        return FieldError(at, error.msg if loc[0] == "options" else f"{'.'.join(at)}: {error.msg}", error.type)
+        return FieldError(at, error.msg if loc[0] == "options" else f"{'.'.join(map(str, at))}: {error.msg}", error.type)
     if document := source.get("document"):
         written = loc[1:] if document == "positions" and loc[:1] == ("positions",) else loc
         return FieldError(("file", *written), error.msg, error.type)

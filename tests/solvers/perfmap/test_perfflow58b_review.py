@@ -3,10 +3,15 @@ the last) and named at the file's lines, and a refusal of a JSON body or upload 
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
+import pytest
+
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.perfmap.validation import load
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
+from plantsolve.solvers.perfmap.upload import parse_upload
+from plantsolve.solvers.perfmap.validation import load, placed
 
 EXAMPLES = Path(__file__).resolve().parents[3] / "examples" / "perfmap"
 ROWS = [r.split(",") for r in (EXAMPLES / "n3_fan_map.csv").read_text().splitlines()[1:] if r.startswith("0.0,")]
@@ -45,3 +50,46 @@ def test_a_pasted_line_repeated_in_every_alpha_plane_is_one_pair():
     pasted = {(SPEEDS[2], alpha): SPEEDS[1] for alpha in (0.0, 1.0)}
     (warning,) = _identical(_speed_alpha_body(pasted))
     assert [p["settings"] for p in warning.details["pairs"]] == [[[float(SPEEDS[1]), 0.0], [float(SPEEDS[2]), 0.0]]]
+
+
+def _json_upload_refusal(body: dict):
+    source = StoredInput.from_bytes("rig.json", json.dumps(body).encode())
+    with pytest.raises(InputRejected) as rejected:
+        load(parse_upload(source, {}), source)
+    return rejected.value.errors
+
+
+def _bad_efficiency_body() -> dict:
+    body = _speed_alpha_body()
+    body["positions"][0]["efficiency"][1] = 0.0  # efficiencies are positive
+    return body
+
+
+def test_a_json_upload_with_a_null_source_names_the_value_at_its_path_in_the_file():
+    (error,) = _json_upload_refusal({**_bad_efficiency_body(), "source": None})
+    assert error.loc == ("file", "positions", 0, "efficiency", 1)
+    (same,) = _json_upload_refusal(_bad_efficiency_body())
+    assert same.loc == error.loc
+
+
+def test_a_bodys_own_form_and_document_are_not_taken_for_the_upload_readers():
+    body = _bad_efficiency_body()
+    rows = [[10 + 100 * i + k for k in range(len(p["flow"]))] for i, p in enumerate(body["positions"])]
+    body["source"] = {"format": "csv", "rows": rows, "form": {"positions.0": ["x"]}}
+    with pytest.raises(InputRejected) as rejected:
+        load(PerfmapRequest.model_validate(body))
+    (error,) = rejected.value.errors
+    assert error.loc == ("file", "row", 11, "efficiency")  # the row the body's rows give, not the form it claims
+    body["source"] = {"format": "json", "rows": rows, "document": "positions"}
+    with pytest.raises(InputRejected) as rejected:
+        load(PerfmapRequest.model_validate(body))
+    assert rejected.value.errors[0].loc == ("file", "row", 11, "efficiency")
+
+
+def test_a_form_place_before_list_indices_is_said_with_them():
+    error = placed(FieldError(("options", "beta_grid", 2), "bad"), {"form": {"options.beta_grid": ["options", "b"]}},
+                   lambda i: ())
+    assert error.loc == ("options", "b", 2) and error.msg == "bad"
+    error = placed(FieldError(("units", "flow", 0), "bad"), {"form": {"units.flow": ["options", "units", "flow"]}},
+                   lambda i: ())
+    assert error.msg == "options.units.flow.0: bad"
