@@ -69,6 +69,7 @@ import numpy as np
 from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
+from plantsolve.solvers.cut_number import Written, short_number, written
 from plantsolve.solvers.length_units import spellings
 from plantsolve.solvers.perfmap.cell_units import reconcile
 from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_RELATIVE_SPEED
@@ -1031,38 +1032,28 @@ def _conventions(data: list[tuple[int, list[str]]], roles: tuple[str, ...], col:
     return convention, errors
 
 
+def _written(cell: str) -> Written | None:
+    """A cell's digits as :mod:`~plantsolve.solvers.cut_number` compares them, its decimal mark read as the
+    column's numbers are (:func:`~plantsolve.solvers.perfmap.numbers.decimals`)."""
+    places = decimals(cell)
+    return Written(False, places) if places is not None else written(cell)
+
+
 def _cut_number(data: list[tuple[int, list[str]]], line: int, row: list[str]) -> dict | None:
     """The last row of a file without a final line ending, read whole, may still be cut inside its last number
-    (0.9278 -> 0.9): its last cell then has fewer decimals than (nearly) every other cell of its column. The facts,
-    or None."""
+    (0.9278 -> 0.9): its last cell is then shorter than (nearly) every other cell of its column
+    (:func:`~plantsolve.solvers.cut_number.short_number`). The facts, or None."""
     j = max((i for i, c in enumerate(row) if c.strip()), default=None)
     if j is None:
         return None
-    last = decimals(row[j])
-    column = [decimals(r[j]) for n, r in data if n != line and not isinstance(r, _Unreadable) and j < len(r)
+    column = [_written(r[j]) for n, r in data if n != line and not isinstance(r, _Unreadable) and j < len(r)
               and r[j].strip()]
-    column = [d for d in column if d is not None]
-    if last is None or not column or last >= max(column):
+    short = short_number(_written(row[j]), column)
+    if short is None:
         return None
-    share = sum(d <= last for d in column) / len(column)
-    # fewer decimals than nearly every cell of the column (exporters drop trailing zeros now and then: one in a
-    # hundred cells may be that short): cut; a few such cells more, and the last may be cut or one of them. One
-    # zero dropped leaves a tenth of the cells a decimal short: a last cell one short is such a cell unless rare
-    if share > (MAYBE_CUT_SHARE if max(column) - last >= 2 else MAYBE_CUT_SHARE_ONE):
-        return None
-    return {"column": j + 1, "value": row[j].strip(), "decimals": last, "column_decimals": [min(column), max(column)],
-            "short_share": share, "certain": share <= CUT_SHARE,
-            "reason": f"its last value {row[j].strip()!r} has {last} decimal(s) where the column's other values have "
-                      f"{min(column)}" + (f" to {max(column)}" if max(column) != min(column) else "")
-                      + ("" if share <= CUT_SHARE else f" ({100 * share:.2g} % of them {last} or fewer)")}
-
-
-# a last cell with fewer decimals than all but this share of its column's cells ends a cut file: the row is not read
-CUT_SHARE = 0.02
-# ... than all but this share: the file may be cut there (a trailing zero dropped as often leaves the cell that
-# short): the row is read, and a warning names the column and the value
-MAYBE_CUT_SHARE = 0.25
-MAYBE_CUT_SHARE_ONE = 0.05  # ... for a last cell one decimal short of the column's longest
+    return {"column": j + 1, "value": row[j].strip(), "decimals": short.digits, "column_decimals": list(short.column),
+            "short_share": short.share, "certain": short.certain,
+            "reason": f"its last value {row[j].strip()!r} has {short.reason}"}
 
 
 _MAP_ARRAY = re.compile(r"^\s*(?:\w+\.)?(alphaMap|NcMap|RlineMap|WcMap|PRmap|effMap)\s*=\s*(?:np\.|numpy\.)?array\(",
