@@ -58,13 +58,13 @@ def _key(s: Setting, speed: int) -> bytes:
 
 
 def identical_lines(settings: list[Setting], rows_of: list[list[int]] | None = None,
-                    row_label: str = "line", lines_of: list[tuple[int, int]] | None = None) -> list[Diagnostic]:
+                    row_label: str = "line", heads: list[int] | None = None) -> list[Diagnostic]:
     """One ``setting_lines_identical`` warning naming two lines of one geometry (settings alike but the speed, the
     one named as a speed, else the last) whose measured points are the same points, flow, pressure and efficiency
     alike: a rig measures two speeds to two lines, so one line pasted a second time under the next speed is what
     that is, and the map was built with the true line lost. Identical planes of another geometry setting are no
     mistake: pyCycle's maps without variable geometry repeat their table at a second alpha, so a pair is named once
-    however many planes repeat it (``lines_of[i]``: the first and last file line of position i, for a map file)."""
+    however many planes repeat it (``heads[i]``: the file line heading position i, a map file's speed line)."""
     if not settings:
         return []
     speed = _speed_index(settings[0].names)
@@ -84,9 +84,8 @@ def identical_lines(settings: list[Setting], rows_of: list[list[int]] | None = N
         if rows_of and s.source_index < len(rows_of):
             rows = rows_of[s.source_index]
             return f"{row_label}s {rows[0]}..{rows[-1]}"
-        if lines_of and s.source_index < len(lines_of):
-            first, last = lines_of[s.source_index]
-            return f"lines {first}..{last}"
+        if heads and s.source_index < len(heads):
+            return f"line {heads[s.source_index]}"
         return f"positions[{s.source_index}]"
 
     if not pairs:

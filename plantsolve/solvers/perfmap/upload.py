@@ -1365,8 +1365,8 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         body["source"] = {**body["source"], "format": "xlsx", "rows": lines}
         return _validated(_with_units_option(body, form.units, "sheet"), form)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
-        body, _, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
-        body["source"] = {"format": "gasturb"}
+        body, speed_lines, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
+        body["source"] = {"format": "gasturb", "setting_lines": speed_lines}
         return _validated(body, form, places=lambda: _map_places(body, content))
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:

@@ -84,7 +84,8 @@ def _load(request: PerfmapRequest, source: StoredInput | None) -> PerfmapInput:
         info["file"] = source.name
     rows_of = request.source.rows if request.source and request.source.rows else None
     label = request.source.row_label if rows_of else "line"
-    repeats = disagreeing_repeats(settings, rows_of, label) + identical_lines(settings, rows_of, label)
+    heads = request.source.setting_lines if request.source and request.source.setting_lines else None
+    repeats = disagreeing_repeats(settings, rows_of, label) + identical_lines(settings, rows_of, label, heads)
     return PerfmapInput(request, internal, units, settings, info,
                         contradicted + plausibility_warnings(internal, units, settings) + repeats)
 

@@ -93,3 +93,17 @@ def test_a_form_place_before_list_indices_is_said_with_them():
     error = placed(FieldError(("units", "flow", 0), "bad"), {"form": {"units.flow": ["options", "units", "flow"]}},
                    lambda i: ())
     assert error.msg == "options.units.flow.0: bad"
+
+
+def test_identical_speed_lines_of_a_gasturb_map_are_named_at_their_lines_in_the_file():
+    from tests.solvers.perfmap.test_perfmap_gasturb import closed_form_tables, write_map
+
+    tables = [t.copy() for t in closed_form_tables()]
+    for t in tables:
+        t[1] = t[0]  # the 0.6 speed line pasted again as the 0.7 one
+    text = write_map(*tables, wrapped=False)  # one record a line: the Mass Flow table's speed rows are lines 5..8
+    source = StoredInput.from_bytes("pasted.map", text.encode())
+    (warning,) = [w for w in load(parse_upload(source, {"map": False}), source).warnings
+                  if w.code == "setting_lines_identical"]
+    assert text.splitlines()[4].startswith("0.6 ") and text.splitlines()[5].startswith("0.7 ")
+    assert "Nc=0.6 (line 5) and Nc=0.7 (line 6)" in warning.message and "positions[" not in warning.message
