@@ -1469,11 +1469,21 @@ def _validated(body: dict, form: Form, places: Callable[[], dict[tuple, int]] | 
 
 def _form_places(body: dict, form: Form) -> dict[str, list[str]]:
     """The request paths whose values the form gave ('options.beta_grid', 'units.flow') and their places in the
-    form: its options, and the units it gave that the request holds."""
-    units = body.get("units") if isinstance(body.get("units"), dict) else {}
+    form: its options, and the units it gave that the request uses (:func:`_units_from_form`)."""
     given = form.units if isinstance(form.units, dict) else {}
     return {**{f"options.{name}": list(at) for name, at in form.at.items()},
-            **{f"units.{q}": ["options", "units", q] for q, unit in given.items() if units.get(q) == unit}}
+            **{f"units.{q}": ["options", "units", q] for q in given if q in _units_from_form(body)}}
+
+
+def _units_from_form(body: dict) -> set[str]:
+    """The quantities whose unit in the request is the form's: a table or JSON file keeps a unit it states (the
+    form's, alike, was not used: a refusal of it is the file's) and takes the form's where it states none, said in an
+    ``upload_units_option`` note; a GasTurb map takes the form's units over its own."""
+    source = body.get("source") if isinstance(body.get("source"), dict) else {}
+    if source.get("format") == "gasturb":
+        return set(body.get("units") or {})
+    return {d["details"]["quantity"] for d in body.get("upload_warnings") or []
+            if isinstance(d, dict) and d.get("code") == "upload_units_option"}
 
 
 def _bare_list(text: str) -> bool:

@@ -107,3 +107,16 @@ def test_identical_speed_lines_of_a_gasturb_map_are_named_at_their_lines_in_the_
                   if w.code == "setting_lines_identical"]
     assert text.splitlines()[4].startswith("0.6 ") and text.splitlines()[5].startswith("0.7 ")
     assert "Nc=0.6 (line 5) and Nc=0.7 (line 6)" in warning.message and "positions[" not in warning.message
+
+
+def test_a_unit_stated_alike_by_the_header_and_the_form_is_the_files():
+    text = (EXAMPLES / "n3_fan_map.csv").read_text()
+    header = text.splitlines()[0]
+    assert header == "theta,phi,flow,pressure,efficiency"
+
+    def form_places(head: str) -> dict:
+        source = StoredInput.from_bytes("m.csv", text.replace(header, head, 1).encode())
+        return parse_upload(source, {"map": False, "units": {"flow": "kg/s"}}).source.form
+
+    assert "units.flow" not in form_places("theta,phi,flow [kg/s],pressure,efficiency")  # the header's was used
+    assert form_places(header)["units.flow"] == ["options", "units", "flow"]  # the form's was used
