@@ -120,3 +120,13 @@ def test_a_unit_stated_alike_by_the_header_and_the_form_is_the_files():
 
     assert "units.flow" not in form_places("theta,phi,flow [kg/s],pressure,efficiency")  # the header's was used
     assert form_places(header)["units.flow"] == ["options", "units", "flow"]  # the form's was used
+
+
+def test_the_gasturb_reader_takes_the_speed_names_from_their_own_module_not_the_plausibility_checks():
+    import ast
+
+    import plantsolve.solvers.perfmap.gasturb_map as reader
+
+    imported = {n.module for n in ast.walk(ast.parse(Path(reader.__file__).read_text())) if isinstance(n, ast.ImportFrom)}
+    assert "plantsolve.solvers.perfmap.speed_names" in imported
+    assert "plantsolve.solvers.perfmap.plausibility" not in imported
