@@ -6,7 +6,8 @@ from __future__ import annotations
 import time
 import tracemalloc
 
-from plantsolve.solvers.flowmeter.field_file import _cut_last_value, _tail_lines
+from plantsolve.solvers.cut_number import last_lines
+from plantsolve.solvers.flowmeter.field_file import cut_last_value
 
 ROWS = 1_600_000
 TEXT = "x y z Bx By\n" + "\n".join(f"{k % 100} {k // 100 % 100} {k // 10000} 0.0009231279005 0.00{k:09d}"
@@ -29,9 +30,10 @@ def measure(tail) -> tuple[float, float]:
 
 best = {"whole splitlines (before)": [], "last 200 kB (after)": []}
 for _ in range(3):
-    for name, tail in (("whole splitlines (before)", whole_split), ("last 200 kB (after)", _tail_lines)):
+    for name, tail in (("whole splitlines (before)", whole_split),
+                       ("last 200 kB (after)", lambda text: last_lines(text, 1001))):
         best[name].append(measure(tail))
-print(f"file: {ROWS:,} rows, {len(TEXT) / 1e6:.0f} MB; cut told: {_cut_last_value(TEXT, None, 4)!r}")
+print(f"file: {ROWS:,} rows, {len(TEXT) / 1e6:.0f} MB; cut told: {cut_last_value(TEXT, None, 4)!r}")
 print(f"{'tail taken by':28} {'CPU s':>8} {'peak MB':>9}")
 for name, runs in best.items():
     print(f"{name:28} {min(r[0] for r in runs):8.3f} {min(r[1] for r in runs):9.1f}")

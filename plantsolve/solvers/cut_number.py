@@ -21,10 +21,21 @@ MAYBE_CUT_SHARE = 0.25
 # ... for a last cell one digit short of the column's longest: one zero dropped leaves a tenth of the cells that short
 MAYBE_CUT_SHARE_ONE = 0.05
 MIN_COMPARABLE = 20  # cells of the column written alike (plain or exponent) below which no cut is told
+TAIL_CHARS = 200_000  # the end of a file its last lines are taken from (a row of a table is some 100 characters)
 
 _EXPONENT = re.compile(r"[-+]?\d*[.,]?\d+[eEdD][-+]?\d+")
 _ZERO = re.compile(r"[-+]?0+")
 _PLAIN = re.compile(r"[-+]?(?:\d+[.,]?\d*|[.,]\d+)")
+
+
+def last_lines(text: str, count: int) -> list[str]:
+    """The last ``count`` nonblank lines of a text, split from its last TAIL_CHARS characters only: a field file of
+    2,000,000 rows split whole held some 200 MB of line strings to look at its end."""
+    tail = text[-TAIL_CHARS:].rstrip(" \t\x00\x1a")
+    lines = tail.splitlines()
+    if len(text) > TAIL_CHARS:
+        lines = lines[1:]  # the first may start mid-line
+    return [line for line in lines[-count:] if line.strip()]
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.cut_number import short_number, written
+from plantsolve.solvers.cut_number import last_lines, short_number, written
 from plantsolve.solvers.length_units import SIZES, two_readings, unit_named
 from plantsolve.solvers.skipped_input import ends_mid_line
 
@@ -185,31 +185,18 @@ def read_field_file(text: str, units: str) -> FieldTable:
     kind = "COMSOL spreadsheet export" if comsol else "CSV with a header"
     return FieldTable(rows, numbers, length_unit, field_unit, conversions,
                       f"{kind}, {len(rows)} rows, columns {', '.join(tokens[c] for c in used)}",
-                      _cut_last_value(text, delimiter, max(used)))
+                      cut_last_value(text, delimiter, max(used)))
 
 
 CUT_SAMPLE = 1000  # rows before the last whose digits the last value is held against
-TAIL_CHARS = 200_000  # the end of the file those rows are taken from (a row of a field file is some 100 characters)
-
-
-def _tail_lines(text: str) -> list[str]:
-    """The last CUT_SAMPLE + 1 nonblank lines, split from the file's last TAIL_CHARS characters only: a field file
-    of 2,000,000 rows split whole held some 200 MB of line strings to look at its end."""
-    tail = text[-TAIL_CHARS:].rstrip(" \t\x00\x1a")
-    lines = tail.splitlines()
-    if len(tail) < len(text.rstrip(" \t\x00\x1a")):
-        lines = lines[1:]  # the first may start mid-line
-    return [line for line in lines[-CUT_SAMPLE - 1:] if line.strip()]
-
-
-def _cut_last_value(text: str, delimiter: str | None, column: int) -> str | None:
+def cut_last_value(text: str, delimiter: str | None, column: int) -> str | None:
     """Why a file without a final line ending may end inside its last number (0.001641116268 -> 0.0016411), or
     None: its last value is shorter than its column's values above it by the file readers' one rule
     (:func:`~plantsolve.solvers.cut_number.short_number`: decimals, or significant digits between exponent-notation
     cells). Such a row reads whole, a number short of its digits (cut to '0.00', the field there is lost)."""
     if not ends_mid_line(text):
         return None
-    lines = _tail_lines(text)
+    lines = last_lines(text, CUT_SAMPLE + 1)
     if not lines:
         return None
     cells = [_split(line.strip(), delimiter) if delimiter else line.split() for line in lines]

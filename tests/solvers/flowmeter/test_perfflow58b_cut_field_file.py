@@ -9,7 +9,7 @@ import tracemalloc
 
 import pytest
 
-from plantsolve.solvers.flowmeter.field_file import read_field_file
+from plantsolve.solvers.flowmeter.field_file import cut_last_value, read_field_file
 
 HEADER = "x [mm],y [mm],z [mm],Bx [T],By [T]\n"
 
@@ -45,12 +45,10 @@ def test_exponent_cells_are_held_against_exponent_cells_only():
 
 
 def test_the_end_of_a_large_file_is_looked_at_without_splitting_it_whole():
-    from plantsolve.solvers.flowmeter.field_file import _cut_last_value
-
     text = HEADER + "\n".join(f"{k}.5,1.25,2.5,0.000123,0.0{k:07d}" for k in range(200_000)) + "\n9,9,9,9,0.001"
     tracemalloc.start()
     try:
-        told = _cut_last_value(text, ",", 4)
+        told = cut_last_value(text, ",", 4)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()

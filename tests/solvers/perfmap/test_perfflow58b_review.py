@@ -127,6 +127,7 @@ def test_the_gasturb_reader_takes_the_speed_names_from_their_own_module_not_the_
 
     import plantsolve.solvers.perfmap.gasturb_map as reader
 
-    imported = {n.module for n in ast.walk(ast.parse(Path(reader.__file__).read_text())) if isinstance(n, ast.ImportFrom)}
+    tree = ast.parse(Path(reader.__file__).read_text())
+    imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
     assert "plantsolve.solvers.perfmap.speed_names" in imported
     assert "plantsolve.solvers.perfmap.plausibility" not in imported
