@@ -131,3 +131,14 @@ def test_the_gasturb_reader_takes_the_speed_names_from_their_own_module_not_the_
     imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
     assert "plantsolve.solvers.perfmap.speed_names" in imported
     assert "plantsolve.solvers.perfmap.plausibility" not in imported
+
+
+def test_without_a_speed_name_a_whole_repeated_plane_is_no_pair_and_an_isolated_pasted_line_is_one():
+    def unnamed(body: dict) -> dict:
+        return {**body, "setting_names": ["theta", "phi"]}  # the speed first, named as no speed: the last is taken
+
+    assert _identical(unnamed(_speed_alpha_body())) == []  # each theta line repeated at phi 1: the whole plane
+    speed_last = [{"setting": [alpha, float(v)], **_line(SPEEDS[0] if (alpha, v) == (1.0, SPEEDS[1]) else v)}
+                  for alpha in (0.0, 1.0) for v in SPEEDS]  # alpha planes alike but one line pasted in the second
+    (warning,) = _identical(unnamed({**_speed_alpha_body(), "positions": speed_last}))
+    assert [p["settings"] for p in warning.details["pairs"]] == [[[1.0, float(SPEEDS[0])], [1.0, float(SPEEDS[1])]]]
