@@ -246,6 +246,10 @@ class PerfmapSource(StrictModel):
         default_factory=list, max_length=2000,
         description="Per position, the file row of each of its points (in the order of its values): what a "
         "refusal of a value names.")
+    setting_lines: list[Integer] = Field(
+        default_factory=list, max_length=2000,
+        description="Per position, the file line that heads its points (a GasTurb/GSP map's speed line in its Mass "
+        "Flow table): what a warning about a whole setting line names.")
     conversions: list[ValueConversion] = Field(default_factory=list, max_length=20,
                                               description="Unit conversions the reader made.")
     document: Literal["request", "positions"] | None = Field(

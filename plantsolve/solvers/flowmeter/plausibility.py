@@ -69,8 +69,8 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             f"meters at {VELOCITY_M_S[0]:g} to {VELOCITY_M_S[1]:g} m/s: "
             + ("mm/s or cm/s written as m/s?" if abs(mean) > VELOCITY_M_S[1] else "a flow rate instead of a velocity?"),
             details={"quantity": quantity, "value": mean, "range_m_s": list(VELOCITY_M_S)}))
-    out += (_file_unit_warnings(request, grid) + _probe_warnings(request) + _grid_warnings(request, grid)
-            + _protrusion_warnings(request))
+    out += (_file_unit_warnings(request, grid) + _cut_file_warning(grid) + _probe_warnings(request)
+            + _grid_warnings(request, grid) + _protrusion_warnings(request))
     e = request.electrodes
     if e.shape == "patch" and e.half_angle <= RADIAN_HALF_ANGLE:
         out.append(Diagnostic(
@@ -83,19 +83,23 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
     return out
 
 
-def _file_unit_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Diagnostic]:
-    """A field file cut inside its last number (``truncated_file``); a field file whose header states no length unit or no unit of B is read in the request's units and in tesla:
-    said, naming what was assumed, since a file in m read as mm (or in mT read as T) passes the range checks when
-    its numbers happen to fit them, and the answer would not show the assumption."""
-    if f is None or f.loc != FILE:
+def _cut_file_warning(f: RequestField | None) -> list[Diagnostic]:
+    """A field file cut inside its last number (``truncated_file``): it was read as written, the number short."""
+    if f is None or f.loc != FILE or f.cut is None:
         return []
-    cut = [] if f.cut is None else [Diagnostic(
+    return [Diagnostic(
         code="truncated_file",
         message=f"Magnetic field file: it has no line ending after its last row, and {f.cut}: the file was cut "
         "inside that number? It was read as written; check the file's end against the export.",
         details={"quantity": ".".join(FILE), "reason": f.cut})]
-    if f.length_unit is not None and f.field_unit is not None:
-        return cut
+
+
+def _file_unit_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Diagnostic]:
+    """A field file whose header states no length unit or no unit of B is read in the request's units and in tesla:
+    said, naming what was assumed, since a file in m read as mm (or in mT read as T) passes the range checks when
+    its numbers happen to fit them, and the answer would not show the assumption."""
+    if f is None or f.loc != FILE or (f.length_unit is not None and f.field_unit is not None):
+        return []
     missing = [what for what, unit in (("length", f.length_unit), ("field", f.field_unit)) if unit is None]
     assumed = {"length": f"its coordinates were read in the request's units ('{request.units}')",
                "field": "its B values were read as tesla"}
@@ -108,7 +112,7 @@ def _file_unit_warnings(request: FlowmeterRequest, f: RequestField | None) -> li
         "the sensitivity depends on the grid's lengths and the signal on B.",
         details={"quantity": ".".join(FILE), "not_stated": missing, "read_in": {
             **({"length": request.units} if "length" in missing else {}), **({"field": "T"} if "field" in missing else {})}})
-    ] + cut
+    ]
 
 
 def _probe_warnings(request: FlowmeterRequest) -> list[Diagnostic]:

@@ -39,7 +39,7 @@ import pint
 
 from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
-from plantsolve.solvers.perfmap.plausibility import named_as_speed
+from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity
 from plantsolve.solvers.skipped_input import truncated_file
@@ -555,9 +555,9 @@ def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | Non
     return units, source if "flow" in units else None
 
 
-def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[int]], dict | None]:
-    """(request body, file line of each point of each position, the options left for the request) of an uploaded
-    map file; the upload's ``units`` option states the file's units (a map states none)."""
+def request_body(content: bytes, options: dict | None) -> tuple[dict, list[int], dict | None]:
+    """(request body, file line of each position's speed line in the Mass Flow table, the options left for the
+    request) of an uploaded map file; the upload's ``units`` option states the file's units (a map states none)."""
     text = decode_text(content, "GasTurb/GSP map text file")
     options = dict(options or {})
     map_type, title, reynolds, sets, notes = read_map(text)
@@ -612,7 +612,7 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
                 continue
             positions.append({"setting": setting, "flow": w[ok].tolist(), "pressure": p[ok].tolist(),
                               "efficiency": e[ok].tolist()})
-            lines.append([int(n) for n in W.value_lines[r][ok]])
+            lines.append(int(W.param_lines[r]))
     if not positions:
         raise reject("no speed line of the map has 3 usable points (positive flow, pressure ratio and efficiency)",
                      ("file", "Mass Flow"))

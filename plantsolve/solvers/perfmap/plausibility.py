@@ -14,6 +14,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.perfmap.setting_lines import Setting
+from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.units import UnitError, parse_speed_unit, parse_unit, registry, revolutions_per_minute
 
 # peak isentropic/polytropic efficiency of a compressor's speed line
@@ -32,9 +33,6 @@ FLOW_PERCENT = (5.0, 200.0)
 SPEED_FRACTION = (0.05, 1.5)
 SPEED_PERCENT = (5.0, 150.0)
 SPEED_RPM = (100.0, 250_000.0)
-SPEED_NAMES = {"speed", "corrected speed", "nc", "n c", "nc map", "ncmap", "relative speed", "rel speed", "rpm",
-               "n", "shaft speed", "rotational speed", "corrected rotational speed", "nmech", "pcn", "% speed",
-               "percent speed", "n/sqrt(theta)", "n/√θ", "speed line"}
 
 
 def _range(values: np.ndarray) -> str:
@@ -164,13 +162,6 @@ def _flow_percent(values: np.ndarray, unit: str) -> list[Diagnostic]:
         f"Flow: values {_range(values)} {unit}; the largest flow of a map in per cent of design lies in {lo:g}..{hi:g} "
         + ("%: a mass or volume flow (kg/s, lbm/s) labelled %?" if top > hi else "%: fractions of design labelled %?"),
         quantity="flow", unit=unit, range=[lo, hi], values=[float(values.min()), float(values.max())])]
-
-
-def named_as_speed(name: str) -> bool:
-    """Whether a setting's name (its unit in brackets dropped) is one rigs and cycle codes give a speed; a name
-    whose brackets are its own ('N/sqrt(theta)') is one as written."""
-    return any(re.sub(r"[\s_\-]+", " ", n.strip().lower()) in SPEED_NAMES
-               for n in (name, re.sub(r"\s*[\[(].*$", "", name)))
 
 
 # Names rigs give a vane setting, matched as named_as_speed matches: such a setting is never the speed the cycle-code

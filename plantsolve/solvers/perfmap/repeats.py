@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.perfmap.setting_lines import Repeat, Setting
+from plantsolve.solvers.perfmap.speed_names import named_as_speed
 
 REPEAT_DISAGREEMENT = 0.05  # (max - min) / mean of the pressures or the efficiencies at one flow
 MAX_NAMED = 10
@@ -45,35 +46,73 @@ def disagreeing_repeats(settings: list[Setting], rows_of: list[list[int]] | None
         details={"count": len(found), "threshold": REPEAT_DISAGREEMENT, "groups": groups})]
 
 
-def identical_lines(settings: list[Setting], rows_of: list[list[int]] | None = None,
-                    row_label: str = "line") -> list[Diagnostic]:
-    """One ``setting_lines_identical`` warning naming two lines of one geometry (settings alike but the last, the
-    speed) whose measured points are the same points, flow, pressure and efficiency alike: a rig measures two
-    speeds to two lines, so one line pasted a second time under the next speed is what that is, and the map was
-    built with the true line lost. Identical planes of another geometry setting are no mistake: pyCycle's maps
-    without variable geometry repeat their table at a second alpha."""
-    seen: dict[bytes, Setting] = {}
-    pairs = []
+def _speed_index(names: tuple[str, ...]) -> int | None:
+    """The setting named as a speed, or None."""
+    return next((k for k, n in enumerate(names) if named_as_speed(n)), None)
+
+
+def _whole_planes(pairs: list[tuple[Setting, Setting]], settings: list[Setting], k: int) -> set[tuple[float, float]]:
+    """The values (a, b) of setting k where every line at a (two or more) has its twin at b: a whole plane of
+    another setting repeated, as pyCycle repeats its table at a second alpha, when setting k may be that one."""
+    lines_at: dict[float, int] = {}
     for s in settings:
-        key = repr(s.values[:-1]).encode() + b"".join(v.tobytes() for v in (s.x, s.y, s.eta))
-        if key in seen:
-            pairs.append((seen[key], s))
-        else:
+        lines_at[s.values[k]] = lines_at.get(s.values[k], 0) + 1
+    twins: dict[tuple[float, float], int] = {}
+    for a, b in pairs:
+        twins[a.values[k], b.values[k]] = twins.get((a.values[k], b.values[k]), 0) + 1
+    return {ab for ab, n in twins.items() if n == lines_at[ab[0]] >= 2}
+
+
+def _key(s: Setting, speed: int) -> bytes:
+    """The geometry (every setting but the speed) and the measured points of a line."""
+    geometry = s.values[:speed] + s.values[speed + 1:]
+    return repr(geometry).encode() + b"".join(v.tobytes() for v in (s.x, s.y, s.eta))
+
+
+def identical_lines(settings: list[Setting], rows_of: list[list[int]] | None = None,
+                    row_label: str = "line", heads: list[int] | None = None) -> list[Diagnostic]:
+    """One ``setting_lines_identical`` warning naming two lines of one geometry (settings alike but the speed)
+    whose measured points are the same points, flow, pressure and efficiency alike: a rig measures two speeds to two
+    lines, so one line pasted a second time under the next speed is what that is, and the map was built with the
+    true line lost. Identical planes of a geometry setting are no mistake: pyCycle's maps without variable geometry
+    repeat their table at a second alpha, so a pair is named once however many planes repeat it, and where no setting
+    is named as the speed (the last is taken for it) a whole plane repeated at another value of it is no pair
+    (``heads[i]``: the file line heading position i, a map file's speed line)."""
+    if not settings:
+        return []
+    named = _speed_index(settings[0].names)
+    speed = len(settings[0].names) - 1 if named is None else named
+    seen: dict[bytes, Setting] = {}
+    pairs, tables = [], set()
+    for s in settings:
+        key = _key(s, speed)
+        if key not in seen:
             seen[key] = s
+            continue
+        table = b"".join(v.tobytes() for v in (s.x, s.y, s.eta))
+        if table not in tables:  # the same pair in a repeated geometry plane is one mistake
+            tables.add(table)
+            pairs.append((seen[key], s))
+
+    if named is None and len(settings[0].names) > 1:
+        planes = _whole_planes(pairs, settings, speed)
+        pairs = [(a, b) for a, b in pairs if (a.values[speed], b.values[speed]) not in planes]
 
     def where(s: Setting) -> str:
         if rows_of and s.source_index < len(rows_of):
             rows = rows_of[s.source_index]
             return f"{row_label}s {rows[0]}..{rows[-1]}"
+        if heads and s.source_index < len(heads):
+            return f"line {heads[s.source_index]}"
         return f"positions[{s.source_index}]"
 
     if not pairs:
         return []
-    named = "; ".join(f"{a.label} ({where(a)}) and {b.label} ({where(b)})" for a, b in pairs[:MAX_NAMED])
+    listed = "; ".join(f"{a.label} ({where(a)}) and {b.label} ({where(b)})" for a, b in pairs[:MAX_NAMED])
     return [Diagnostic(
         code="setting_lines_identical",
         message=f"{len(pairs)} pair(s) of settings hold the same {len(pairs[0][0].x)} measured points, flow, "
-        f"pressure and efficiency alike: {named}{' …' if len(pairs) > MAX_NAMED else ''}. Two settings measure two "
+        f"pressure and efficiency alike: {listed}{' …' if len(pairs) > MAX_NAMED else ''}. Two settings measure two "
         "lines: one line pasted a second time under another setting's value? The map is built as given.",
         details={"pairs": [{"settings": [list(a.values), list(b.values)],
                             "positions": [a.source_index, b.source_index]} for a, b in pairs[:100]]})]

@@ -69,6 +69,7 @@ import numpy as np
 from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
+from plantsolve.solvers.cut_number import Written, short_number, written
 from plantsolve.solvers.length_units import spellings
 from plantsolve.solvers.perfmap.cell_units import reconcile
 from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_RELATIVE_SPEED
@@ -1031,38 +1032,28 @@ def _conventions(data: list[tuple[int, list[str]]], roles: tuple[str, ...], col:
     return convention, errors
 
 
+def _written(cell: str) -> Written | None:
+    """A cell's digits as :mod:`~plantsolve.solvers.cut_number` compares them, its decimal mark read as the
+    column's numbers are (:func:`~plantsolve.solvers.perfmap.numbers.decimals`)."""
+    places = decimals(cell)
+    return Written(False, places) if places is not None else written(cell)
+
+
 def _cut_number(data: list[tuple[int, list[str]]], line: int, row: list[str]) -> dict | None:
     """The last row of a file without a final line ending, read whole, may still be cut inside its last number
-    (0.9278 -> 0.9): its last cell then has fewer decimals than (nearly) every other cell of its column. The facts,
-    or None."""
+    (0.9278 -> 0.9): its last cell is then shorter than (nearly) every other cell of its column
+    (:func:`~plantsolve.solvers.cut_number.short_number`). The facts, or None."""
     j = max((i for i, c in enumerate(row) if c.strip()), default=None)
     if j is None:
         return None
-    last = decimals(row[j])
-    column = [decimals(r[j]) for n, r in data if n != line and not isinstance(r, _Unreadable) and j < len(r)
+    column = [_written(r[j]) for n, r in data if n != line and not isinstance(r, _Unreadable) and j < len(r)
               and r[j].strip()]
-    column = [d for d in column if d is not None]
-    if last is None or not column or last >= max(column):
+    short = short_number(_written(row[j]), column)
+    if short is None:
         return None
-    share = sum(d <= last for d in column) / len(column)
-    # fewer decimals than nearly every cell of the column (exporters drop trailing zeros now and then: one in a
-    # hundred cells may be that short): cut; a few such cells more, and the last may be cut or one of them. One
-    # zero dropped leaves a tenth of the cells a decimal short: a last cell one short is such a cell unless rare
-    if share > (MAYBE_CUT_SHARE if max(column) - last >= 2 else MAYBE_CUT_SHARE_ONE):
-        return None
-    return {"column": j + 1, "value": row[j].strip(), "decimals": last, "column_decimals": [min(column), max(column)],
-            "short_share": share, "certain": share <= CUT_SHARE,
-            "reason": f"its last value {row[j].strip()!r} has {last} decimal(s) where the column's other values have "
-                      f"{min(column)}" + (f" to {max(column)}" if max(column) != min(column) else "")
-                      + ("" if share <= CUT_SHARE else f" ({100 * share:.2g} % of them {last} or fewer)")}
-
-
-# a last cell with fewer decimals than all but this share of its column's cells ends a cut file: the row is not read
-CUT_SHARE = 0.02
-# ... than all but this share: the file may be cut there (a trailing zero dropped as often leaves the cell that
-# short): the row is read, and a warning names the column and the value
-MAYBE_CUT_SHARE = 0.25
-MAYBE_CUT_SHARE_ONE = 0.05  # ... for a last cell one decimal short of the column's longest
+    return {"column": j + 1, "value": row[j].strip(), "decimals": short.digits, "column_decimals": list(short.column),
+            "short_share": short.share, "certain": short.certain,
+            "reason": f"its last value {row[j].strip()!r} has {short.reason}"}
 
 
 _MAP_ARRAY = re.compile(r"^\s*(?:\w+\.)?(alphaMap|NcMap|RlineMap|WcMap|PRmap|effMap)\s*=\s*(?:np\.|numpy\.)?array\(",
@@ -1352,7 +1343,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         refuse_other_kind(body, "perfmap")
         form = form_beside(body, options, FORM)
         origin = {"format": "json", "document": "positions" if _bare_list(text) else "request"}
-        own = body.get("source", {})
+        own = body.get("source")
+        own = {} if own is None else own  # a null source is none: the reader's is stated
         if isinstance(own, dict):  # anything else is refused naming file.source
             body = {**body, "source": {**own, **origin}}
         return _validated(_with_units_option(body, form.units, "JSON request"), form, origin=origin)
@@ -1373,8 +1365,8 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         body["source"] = {**body["source"], "format": "xlsx", "rows": lines}
         return _validated(_with_units_option(body, form.units, "sheet"), form)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
-        body, _, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
-        body["source"] = {"format": "gasturb"}
+        body, speed_lines, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
+        body["source"] = {"format": "gasturb", "setting_lines": speed_lines}
         return _validated(body, form, places=lambda: _map_places(body, content))
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:
@@ -1477,11 +1469,21 @@ def _validated(body: dict, form: Form, places: Callable[[], dict[tuple, int]] | 
 
 def _form_places(body: dict, form: Form) -> dict[str, list[str]]:
     """The request paths whose values the form gave ('options.beta_grid', 'units.flow') and their places in the
-    form: its options, and the units it gave that the request holds."""
-    units = body.get("units") if isinstance(body.get("units"), dict) else {}
+    form: its options, and the units it gave that the request uses (:func:`_units_from_form`)."""
     given = form.units if isinstance(form.units, dict) else {}
     return {**{f"options.{name}": list(at) for name, at in form.at.items()},
-            **{f"units.{q}": ["options", "units", q] for q, unit in given.items() if units.get(q) == unit}}
+            **{f"units.{q}": ["options", "units", q] for q in given if q in _units_from_form(body)}}
+
+
+def _units_from_form(body: dict) -> set[str]:
+    """The quantities whose unit in the request is the form's: a table or JSON file keeps a unit it states (the
+    form's, alike, was not used: a refusal of it is the file's) and takes the form's where it states none, said in an
+    ``upload_units_option`` note; a GasTurb map takes the form's units over its own."""
+    source = body.get("source") if isinstance(body.get("source"), dict) else {}
+    if source.get("format") == "gasturb":
+        return set(body.get("units") or {})
+    return {d["details"]["quantity"] for d in body.get("upload_warnings") or []
+            if isinstance(d, dict) and d.get("code") == "upload_units_option"}
 
 
 def _bare_list(text: str) -> bool:

@@ -13,7 +13,8 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
-from plantsolve.solvers.perfmap.plausibility import named_as_speed, plausibility_warnings
+from plantsolve.solvers.perfmap.plausibility import plausibility_warnings
+from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.repeats import disagreeing_repeats, identical_lines
 from plantsolve.solvers.perfmap.setting_lines import Setting, prepare
 from plantsolve.solvers.perfmap.units import (
@@ -65,6 +66,8 @@ def load(request: PerfmapRequest, source: StoredInput | None = None) -> PerfmapI
         if source is None and not (request.source and request.source.rows):
             raise
         where = request.source.model_dump() if request.source else {}
+        if source is None:  # a client's body: only the upload reader says where the form or the file put a value
+            where = {k: v for k, v in where.items() if k not in ("form", "document")}
         raise InputRejected([placed(e, where, request.setting_values) for e in error.errors]) from None
 
 
@@ -81,7 +84,8 @@ def _load(request: PerfmapRequest, source: StoredInput | None) -> PerfmapInput:
         info["file"] = source.name
     rows_of = request.source.rows if request.source and request.source.rows else None
     label = request.source.row_label if rows_of else "line"
-    repeats = disagreeing_repeats(settings, rows_of, label) + identical_lines(settings, rows_of, label)
+    heads = request.source.setting_lines if request.source and request.source.setting_lines else None
+    repeats = disagreeing_repeats(settings, rows_of, label) + identical_lines(settings, rows_of, label, heads)
     return PerfmapInput(request, internal, units, settings, info,
                         contradicted + plausibility_warnings(internal, units, settings) + repeats)
 
@@ -99,7 +103,7 @@ def placed(error: FieldError, source: dict[str, Any], setting_of: Callable[[int]
     path = ".".join(map(str, loc))
     if (form := (source.get("form") or {}).get(".".join(map(str, loc[:2])))) is not None:
         at = (*form, *loc[2:])
-        return FieldError(at, error.msg if loc[0] == "options" else f"{'.'.join(at)}: {error.msg}", error.type)
+        return FieldError(at, error.msg if loc[0] == "options" else f"{'.'.join(map(str, at))}: {error.msg}", error.type)
     if document := source.get("document"):
         written = loc[1:] if document == "positions" and loc[:1] == ("positions",) else loc
         return FieldError(("file", *written), error.msg, error.type)
