@@ -51,6 +51,7 @@ def written_attributes(line: str) -> int | None:
 # a string (its quotes doubled inside) or a comment; one the text ends inside runs to the end (a chunk may stop in it)
 _LEXEMES = {str: re.compile(r"'(?:[^']|'')*+(?:'|\Z)|/\*(?:[^*]|\*(?!/))*+(?:\*/|\Z)"),
             bytes: re.compile(rb"'(?:[^']|'')*+(?:'|\Z)|/\*(?:[^*]|\*(?!/))*+(?:\*/|\Z)")}
+_CLOSED = {str: re.compile(r"'(?:[^']|'')*'|/\*.*\*/", re.DOTALL), bytes: re.compile(rb"'(?:[^']|'')*'|/\*.*\*/", re.DOTALL)}
 _NOT_LINE_END = {str: re.compile(r"[^\r\n]"), bytes: re.compile(rb"[^\r\n]")}
 
 
@@ -68,6 +69,35 @@ def blank_strings_and_comments(text: str | bytes) -> str | bytes:
     string or comment ('a;#3=B', /* exported; #3=IFCCOLUMN( */) no longer looks like the text's own. Scans of the
     instances read this."""
     return _LEXEMES[type(text)].sub(_spaces, text)
+
+
+def left_open(text: str | bytes) -> int | None:
+    """Where the string or comment ``text`` ends inside starts (a quote or '/*' never closed), None when it ends
+    outside both."""
+    last = None
+    for last in _LEXEMES[type(text)].finditer(text):
+        pass
+    if last is None or last.end() < len(text) or _CLOSED[type(text)].fullmatch(last.group()):
+        return None
+    return last.start()
+
+
+_NOT_SPLIT = (b"\r\n", b"''", b"/*", b"*/")  # a line end, a quote doubled in a string, a comment's marks
+
+
+def carried_from(text: bytes, at: int) -> tuple[int, bytes, int | None]:
+    """Where to cut ``text``, a chunk read without a ';' outside strings, to carry its rest from about ``at`` to the
+    next: not inside a CR LF, a doubled quote or a comment's mark; the mark the rest is to start with when it starts
+    inside a string or comment (b"'", b"/*", else b""), so it is read as it is; and where that string or comment
+    starts in ``text`` (None: the rest starts outside both)."""
+    while at > 0 and text[at - 1:at + 1] in _NOT_SPLIT:
+        at -= 1
+    for found in _LEXEMES[bytes].finditer(text):
+        if found.start() >= at:
+            break
+        if at < found.end():
+            return at, (b"'" if text[found.start():found.start() + 1] == b"'" else b"/*"), found.start()
+    return at, b"", None
 
 
 def line_ends(text: str | bytes, start: int = 0, end: int | None = None) -> int:

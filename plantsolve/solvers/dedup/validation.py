@@ -19,7 +19,8 @@ from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import refuse_at_intake, stated_length_unit
 from plantsolve.solvers.ifc_schema import counts_elsewhere, first_misfit
 from plantsolve.solvers.other_kinds import file_holds
-from plantsolve.solvers.step_file import blank_strings_and_comments, instance_text, line_ends
+from plantsolve.solvers.step_file import (blank_strings_and_comments, carried_from, instance_text, left_open,
+                                         line_ends)
 
 _SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)", re.IGNORECASE)
 
@@ -98,6 +99,7 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
     product = shape = False
     carry = b""
     lines_before = 0
+    open_since = None  # the line of a string or comment the carried text starts inside
     first = True
     with source.stream() as stream:
         while chunk := stream.read(CHUNK):
@@ -107,12 +109,14 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
             blanked = blank_strings_and_comments(whole)
             cut = blanked.rfind(b";")  # an instance definition is seen whole: the text up to its last ';'
             if cut < 0:  # inside one long instance (a point list): what is passed over still has its lines
-                kept = max(0, len(whole) - CARRIED)
-                kept -= kept > 0 and whole[kept - 1:kept + 1] == b"\r\n"  # a CR LF is one line end, counted with the next chunk
+                kept, opener, opened = carried_from(whole, max(0, len(whole) - CARRIED))
+                if opened is not None and open_since is None:
+                    open_since = lines_before + line_ends(whole, 0, opened) + 1
                 lines_before += line_ends(whole, 0, kept)
-                carry, text, blanked = whole[kept:], b"", b""
+                carry, text, blanked = opener + whole[kept:], b"", b""
             else:
                 carry, text, blanked = whole[cut + 1:], whole[:cut + 1], blanked[:cut + 1]
+                open_since = None
             names = Counter(m.group(2).upper() for m in DEFINITION.finditer(blanked))
             refuse_other_schema(blanked, [first_definition(blanked, name) for name in names
                                           if name and name not in counts], lines_before, schema)
@@ -125,6 +129,12 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
             shape = shape or not SHAPES.isdisjoint(names)
             if product and shape:
                 return
+    if (opened := left_open(carry)) is not None:  # the instances after it were read as a string's or comment's text
+        what = "a string ('...')" if carry[opened:opened + 1] == b"'" else "a comment (/* ... */)"
+        line = open_since if opened == 0 and open_since is not None else lines_before + line_ends(carry, 0, opened) + 1
+        raise reject(f"line {line}: {what} opened here is not closed before "
+                     "the end of the file (or a quote before it is missing): the instances after it cannot be read; "
+                     "export the model again")
     if not counts:
         raise reject("the file holds no model: its DATA section has no instance (a STEP header alone); export the "
                      "model with its products")
