@@ -7,8 +7,13 @@ from __future__ import annotations
 
 import pytest
 
-from plantsolve.solvers.step_file import (blank_strings_and_comments, carried_from, instance_text, left_open,
-                                          line_ends)
+from plantsolve.solvers.step_file import (
+    blank_strings_and_comments,
+    carried_from,
+    instance_text,
+    left_open,
+    line_ends,
+)
 
 TEXT = "#1=A('O''Neil;#2=B',/* c;\r\n#3=C( */$);\r#4=D('/*');/* '; */#5=E($);"
 

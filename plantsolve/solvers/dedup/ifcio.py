@@ -13,7 +13,12 @@ import ifcopenshell
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.ifc_schema import SCHEMAS, attribute_count, counts_elsewhere
 from plantsolve.solvers.other_kinds import file_holds
-from plantsolve.solvers.step_file import blank_strings_and_comments, line_ends, where_cut, written_attributes
+from plantsolve.solvers.step_file import (
+    blank_strings_and_comments,
+    line_ends,
+    where_cut,
+    written_attributes,
+)
 
 # an instance's definition: '#12=' after a line's start or the ';' ending the one before, looked for in the text with
 # its strings and comments blanked (a ';#3=B' in a string is no definition)

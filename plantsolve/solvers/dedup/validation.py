@@ -19,8 +19,13 @@ from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import refuse_at_intake, stated_length_unit
 from plantsolve.solvers.ifc_schema import counts_elsewhere, first_misfit
 from plantsolve.solvers.other_kinds import file_holds
-from plantsolve.solvers.step_file import (blank_strings_and_comments, carried_from, instance_text, left_open,
-                                         line_ends)
+from plantsolve.solvers.step_file import (
+    blank_strings_and_comments,
+    carried_from,
+    instance_text,
+    left_open,
+    line_ends,
+)
 
 _SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)", re.IGNORECASE)
 
