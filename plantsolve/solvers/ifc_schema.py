@@ -66,8 +66,9 @@ class Misfit:
 
 def first_misfit(text: str | bytes, definitions: Iterable[re.Match | None], schema: str, *, unknown: bool,
                  limit: int | None = None) -> Misfit | None:
-    """The first of ``definitions`` (matches in ``text``: group 1 the instance number, group 2 its entity; the first
-    of each entity looked at) whose entity ``schema`` does not have (when ``unknown``; else passed over) or whose
+    """The first of ``definitions`` (matches in ``text``, its strings and comments blanked by
+    ``blank_strings_and_comments``: group 1 the instance number, group 2 its entity; the first of each entity looked
+    at) whose entity ``schema`` does not have (when ``unknown``; else passed over) or whose
     instance writes another number of attribute values than the entity has there. An instance not closed in
     ``text`` is passed over (the parse counts it); ``limit``: at most so many entities of the schema looked at."""
     seen: set[str] = set()
@@ -90,7 +91,7 @@ def first_misfit(text: str | bytes, definitions: Iterable[re.Match | None], sche
                               {other: attribute_count(other, name) for other in others})
             continue
         seen.add(name)
-        instance = instance_text(text, match.start(1) - 1)
+        instance = instance_text(text, match.start(1) - 1, blanked=text)
         if instance is None:
             continue
         written = written_attributes(instance.decode("latin-1") if isinstance(instance, bytes) else instance)

@@ -48,16 +48,73 @@ def written_attributes(line: str) -> int | None:
     return int(np.count_nonzero((text == ord(",")) & (depth == 1))) + 1
 
 
-def instance_text(text: str | bytes, start: int) -> str | bytes | None:
-    """The instance whose '#' is at ``start`` of ``text``, up to its own closing ';' outside strings (a string doubles
-    its quotes inside, so a ';' follows an even number of quotes exactly when it is outside one); None when ``text``
-    ends before it closes. The standard puts no line breaks in the way: a file may write several instances on one
-    line, one over several lines, or its lines ended by CR alone."""
-    semicolon, quote = (b";", b"'") if isinstance(text, bytes) else (";", "'")
-    quotes, at = 0, start
-    while (end := text.find(semicolon, at)) >= 0:
-        quotes += text.count(quote, at, end)
-        if quotes % 2 == 0:
-            return text[start:end + 1]
-        at = end + 1
-    return None
+# a string (its quotes doubled inside) or a comment; one the text ends inside runs to the end (a chunk may stop in it)
+_LEXEMES = {str: re.compile(r"'(?:[^']|'')*+(?:'|\Z)|/\*(?:[^*]|\*(?!/))*+(?:\*/|\Z)"),
+            bytes: re.compile(rb"'(?:[^']|'')*+(?:'|\Z)|/\*(?:[^*]|\*(?!/))*+(?:\*/|\Z)")}
+_CLOSED = {str: re.compile(r"'(?:[^']|'')*'|/\*.*\*/", re.DOTALL), bytes: re.compile(rb"'(?:[^']|'')*'|/\*.*\*/", re.DOTALL)}
+_NOT_LINE_END = {str: re.compile(r"[^\r\n]"), bytes: re.compile(rb"[^\r\n]")}
+
+
+def _spaces(found: re.Match) -> str | bytes:
+    lexeme = found.group()
+    kind = type(lexeme)
+    if (b"\n" if kind is bytes else "\n") in lexeme or (b"\r" if kind is bytes else "\r") in lexeme:
+        return _NOT_LINE_END[kind].sub(b" " if kind is bytes else " ", lexeme)
+    return (b" " if kind is bytes else " ") * len(lexeme)
+
+
+def blank_strings_and_comments(text: str | bytes) -> str | bytes:
+    """``text`` with each string and comment (one left open at its end too) written over by spaces of the same
+    length, its line ends kept: offsets and line numbers stay those of ``text``, and a ';', '#12=' or quote inside a
+    string or comment ('a;#3=B', /* exported; #3=IFCCOLUMN( */) no longer looks like the text's own. Scans of the
+    instances read this."""
+    return _LEXEMES[type(text)].sub(_spaces, text)
+
+
+def left_open(text: str | bytes) -> int | None:
+    """Where the string or comment ``text`` ends inside starts (a quote or '/*' never closed), None when it ends
+    outside both."""
+    last = None
+    for last in _LEXEMES[type(text)].finditer(text):
+        pass
+    if last is None or last.end() < len(text) or _CLOSED[type(text)].fullmatch(last.group()):
+        return None
+    return last.start()
+
+
+_NOT_SPLIT = (b"\r\n", b"''", b"/*", b"*/")  # a line end, a quote doubled in a string, a comment's marks
+
+
+def carried_from(text: bytes, at: int) -> tuple[int, bytes, int | None]:
+    """Where to cut ``text``, a chunk read without a ';' outside strings, to carry its rest from about ``at`` to the
+    next: not inside a CR LF, a doubled quote or a comment's mark; the mark the rest is to start with when it starts
+    inside a string or comment (b"'", b"/*", else b""), so it is read as it is; and where that string or comment
+    starts in ``text`` (None: the rest starts outside both)."""
+    while at > 0 and text[at - 1:at + 1] in _NOT_SPLIT:
+        at -= 1
+    for found in _LEXEMES[bytes].finditer(text):
+        if found.start() >= at:
+            break
+        if at < found.end():
+            return at, (b"'" if text[found.start():found.start() + 1] == b"'" else b"/*"), found.start()
+    return at, b"", None
+
+
+def line_ends(text: str | bytes, start: int = 0, end: int | None = None) -> int:
+    """How many lines end in ``text[start:end]``, each by LF, CR or CR LF (a file may end its lines by CR alone)."""
+    lf, cr, crlf = (b"\n", b"\r", b"\r\n") if isinstance(text, bytes) else ("\n", "\r", "\r\n")
+    end = len(text) if end is None else end
+    return text.count(lf, start, end) + text.count(cr, start, end) - text.count(crlf, start, end)
+
+
+def instance_text(text: str | bytes, start: int, blanked: str | bytes | None = None) -> str | bytes | None:
+    """The instance whose '#' is at ``start`` of ``text``, up to its own closing ';' outside strings and comments;
+    None when ``text`` ends before it closes. ``blanked``: :func:`blank_strings_and_comments` of ``text``, made once
+    by a caller that cuts many instances (else the rest of the text from ``start`` is blanked for this one). The
+    standard puts no line breaks in the way: a file may write several instances on one line, one over several
+    lines, or its lines ended by CR alone."""
+    if blanked is None:
+        end = blank_strings_and_comments(text[start:]).find(b";" if isinstance(text, bytes) else ";")
+        return None if end < 0 else text[start:start + end + 1]
+    end = blanked.find(b";" if isinstance(blanked, bytes) else ";", start)
+    return None if end < 0 else text[start:end + 1]

@@ -13,12 +13,17 @@ import ifcopenshell
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.ifc_schema import SCHEMAS, attribute_count, counts_elsewhere
 from plantsolve.solvers.other_kinds import file_holds
-from plantsolve.solvers.step_file import where_cut, written_attributes
+from plantsolve.solvers.step_file import (
+    blank_strings_and_comments,
+    line_ends,
+    where_cut,
+    written_attributes,
+)
 
-# an instance's definition: '#12=' after a line's start or the ';' ending the one before
+# an instance's definition: '#12=' after a line's start or the ';' ending the one before, looked for in the text with
+# its strings and comments blanked (a ';#3=B' in a string is no definition)
 DEFINITION = re.compile(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
 MAX_NAMED = 5
-NEWLINE = b"\n"
 HEADER_BYTES = 4096  # the STEP header is looked for this far in
 MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
 # IfcOpenShell's parser on an instance written with more or fewer attributes than its entity has in the header's
@@ -98,14 +103,16 @@ def read_back(text: bytes) -> ifcopenshell.file:
 
 
 def instance_line(text: bytes, number: int) -> int | None:
-    """The line of a STEP text on which instance ``#number`` is defined, None when it is not."""
-    found = re.search(rb"(?:^|[;\n])[ \t\r]*#" + str(number).encode() + rb"[ \t]*=", text)
-    return None if found is None else text.count(NEWLINE, 0, found.end()) + 1
+    """The line of a STEP text on which instance ``#number`` is defined (lines ended by LF, CR or CR LF), None when it
+    is not."""
+    blanked = blank_strings_and_comments(text)
+    found = re.search(rb"(?:^|[;\n\r])[ \t]*#" + str(number).encode() + rb"[ \t]*=", blanked)
+    return None if found is None else line_ends(blanked, 0, found.end()) + 1
 
 
 def defined_instances(text: bytes) -> int:
     """How many instances a STEP text defines (IfcOpenShell's count falls short of it where it could not read one)."""
-    return sum(1 for _ in DEFINITION.finditer(text))
+    return sum(1 for _ in DEFINITION.finditer(blank_strings_and_comments(text)))
 
 
 def refuse_unread(text: bytes, model: ifcopenshell.file) -> None:
@@ -113,8 +120,10 @@ def refuse_unread(text: bytes, model: ifcopenshell.file) -> None:
     (one of the two definitions is lost), an entity the header's FILE_SCHEMA does not have (an IFC4 file labelled
     IFC2X3), or a line it could not parse (attributes of another schema). Optimizing what was read would write a
     model without them."""
+    text = blank_strings_and_comments(text)
+
     def line(match) -> int:
-        return text.count(b"\n", 0, match.start(1)) + 1
+        return line_ends(text, 0, match.start(1)) + 1
 
     first: dict[int, re.Match] = {}
     twice: list[str] = []

@@ -19,7 +19,13 @@ from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import refuse_at_intake, stated_length_unit
 from plantsolve.solvers.ifc_schema import counts_elsewhere, first_misfit
 from plantsolve.solvers.other_kinds import file_holds
-from plantsolve.solvers.step_file import instance_text
+from plantsolve.solvers.step_file import (
+    blank_strings_and_comments,
+    carried_from,
+    instance_text,
+    left_open,
+    line_ends,
+)
 
 _SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)", re.IGNORECASE)
 
@@ -98,26 +104,42 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
     product = shape = False
     carry = b""
     lines_before = 0
+    open_since = None  # the line of a string or comment the carried text starts inside
     first = True
     with source.stream() as stream:
         while chunk := stream.read(CHUNK):
-            text = carry + chunk
-            cut = text.rfind(b";")  # an instance definition is seen whole: the text up to its last ';'
+            whole = carry + chunk
+            # strings and comments blanked first: a ';' or '#3=B' in one is none of the file's (one left open at the
+            # chunk's end is blanked to it, and the cut comes before it)
+            blanked = blank_strings_and_comments(whole)
+            cut = blanked.rfind(b";")  # an instance definition is seen whole: the text up to its last ';'
             if cut < 0:  # inside one long instance (a point list): what is passed over still has its lines
-                lines_before += text.count(b"\n", 0, max(0, len(text) - CARRIED))
-            text, carry = (text[:cut + 1], text[cut + 1:]) if cut >= 0 else (b"", text[-CARRIED:])
-            names = Counter(m.group(2).upper() for m in DEFINITION.finditer(text))
-            refuse_other_schema(text, [first_definition(text, name) for name in names if name and name not in counts],
-                                lines_before, schema)
+                kept, opener, opened = carried_from(whole, max(0, len(whole) - CARRIED))
+                if opened is not None and open_since is None:
+                    open_since = lines_before + line_ends(whole, 0, opened) + 1
+                lines_before += line_ends(whole, 0, kept)
+                carry, text, blanked = opener + whole[kept:], b"", b""
+            else:
+                carry, text, blanked = whole[cut + 1:], whole[:cut + 1], blanked[:cut + 1]
+                open_since = None
+            names = Counter(m.group(2).upper() for m in DEFINITION.finditer(blanked))
+            refuse_other_schema(blanked, [first_definition(blanked, name) for name in names
+                                          if name and name not in counts], lines_before, schema)
             if first:  # the contexts and their world coordinate systems come first in an export
-                refuse_unplaceable_world(text, schema)
+                refuse_unplaceable_world(text, schema, blanked)
                 first = False
-            lines_before += text.count(b"\n")
+            lines_before += line_ends(blanked)
             counts.update(names)
             product = product or not products.isdisjoint(names)
             shape = shape or not SHAPES.isdisjoint(names)
             if product and shape:
                 return
+    if (opened := left_open(carry)) is not None:  # the instances after it were read as a string's or comment's text
+        what = "a string ('...')" if carry[opened:opened + 1] == b"'" else "a comment (/* ... */)"
+        line = open_since if opened == 0 and open_since is not None else lines_before + line_ends(carry, 0, opened) + 1
+        raise reject(f"line {line}: {what} opened here is not closed before "
+                     "the end of the file (or a quote before it is missing): the instances after it cannot be read; "
+                     "export the model again")
     if not counts:
         raise reject("the file holds no model: its DATA section has no instance (a STEP header alone); export the "
                      "model with its products")
@@ -129,7 +151,8 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
 
 
 def first_definition(text: bytes, name: bytes) -> re.Match | None:
-    """A definition of an instance of entity ``name`` (as STEP writes it, capitals) in ``text``, which holds one: the
+    """A definition of an instance of entity ``name`` (as STEP writes it, capitals) in ``text`` (its strings and
+    comments blanked), which holds one: the
     first written '#n=NAME(', found by a plain search (a case-blind pattern search took a second over a 60 MB model)
     and matched from the line start or ';' before its '#' (several instances may share a line), else the first the
     pattern finds."""
@@ -148,12 +171,12 @@ def refuse_other_schema(text: bytes, firsts: list[re.Match | None], lines_before
     """A 422 for a model of another schema than its header's FILE_SCHEMA, seen in the text intake scans: an entity
     the schema does not have, or an entity's first instance written with another number of attributes than it has
     there (an IFC2X3 model labelled IFC4: its IfcColumn has 8, IFC4's 9). The solve's parse refused these only after
-    the job had been accepted. ``firsts``: definitions of entities not seen in an earlier chunk, ``lines_before``:
+    the job had been accepted. ``text``: its strings and comments blanked, ``firsts``: definitions of entities not seen in an earlier chunk, ``lines_before``:
     the lines of the file before ``text``."""
     misfit = first_misfit(text, firsts, schema, unknown=True)
     if misfit is None:
         return
-    at = lines_before + text.count(b"\n", 0, misfit.start) + 1
+    at = lines_before + line_ends(text, 0, misfit.start) + 1
     fits = misfit.fits
     if misfit.entity is None:
         raise reject(f"line {at}: #{misfit.number}={misfit.name} is no entity of the header's "
@@ -181,39 +204,43 @@ MAX_CONTEXTS = 4
 
 
 def _index(text: bytes) -> dict[int, int]:
-    """Where ``text`` defines each instance: its number -> the offset of its '#' (the first of two definitions)."""
+    """Where ``text`` (its strings and comments blanked) defines each instance: its number -> the offset of its '#'
+    (the first of two definitions)."""
     index: dict[int, int] = {}
     for match in DEFINITION.finditer(text):
         index.setdefault(int(match.group(1)), match.start(1) - 1)
     return index
 
 
-def _definitions(text: bytes, index: dict[int, int], number: int, depth: int, found: dict[int, bytes]) -> bool:
+def _definitions(text: bytes, blanked: bytes, index: dict[int, int], number: int, depth: int,
+                 found: dict[int, bytes]) -> bool:
     """``found`` filled with the definitions of instance ``number`` and of those it refers to, ``depth`` levels down;
     False when one of them is not in ``text`` (further on in the file: the solve looks at it)."""
     if number in found:
         return True
-    instance = instance_text(text, index[number]) if number in index else None
+    instance = instance_text(text, index[number], blanked) if number in index else None
     if instance is None:
         return False
     found[number] = instance
-    return depth == 0 or all(_definitions(text, index, int(ref), depth - 1, found)
-                             for ref in _REFERENCE.findall(instance.split(b"=", 1)[1]))
+    references = _REFERENCE.findall(blanked[index[number]:index[number] + len(instance)].split(b"=", 1)[1])
+    return depth == 0 or all(_definitions(text, blanked, index, int(ref), depth - 1, found) for ref in references)
 
 
-def refuse_unplaceable_world(text: bytes, schema: str) -> None:
+def refuse_unplaceable_world(text: bytes, schema: str, blanked: bytes | None = None) -> None:
     """A 422 for a representation context whose WorldCoordinateSystem no product can be placed in (a writer's 1e308, a
     zero or parallel axis, a location beyond the context's Precision), read from the file's first chunk: the context
     and the instances it refers to as a model of their own, judged as the solve judges the whole model's (which it
     refused only after the job had been accepted). The text's definitions are indexed once, and its first
-    MAX_CONTEXTS contexts judged."""
-    contexts = [int(found.group(1)) for found in itertools.islice(_CONTEXT.finditer(text), MAX_CONTEXTS)]
+    MAX_CONTEXTS contexts judged; they are looked for in ``blanked``, the text with its strings and comments
+    blanked (made here when not given), and read from ``text``."""
+    blanked = blank_strings_and_comments(text) if blanked is None else blanked
+    contexts = [int(found.group(1)) for found in itertools.islice(_CONTEXT.finditer(blanked), MAX_CONTEXTS)]
     if not contexts:
         return
-    index = _index(text)
+    index = _index(blanked)
     for context in contexts:
         found: dict[int, bytes] = {}
-        if not _definitions(text, index, context, WORLD_DEPTH, found):
+        if not _definitions(text, blanked, index, context, WORLD_DEPTH, found):
             continue
         data = b"\n".join(found[k] for k in sorted(found)).decode("latin-1")
         try:

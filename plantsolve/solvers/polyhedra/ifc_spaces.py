@@ -30,7 +30,7 @@ from plantsolve.solvers.ifc_units import project_length_scale
 from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
 from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out, lines_of_another_schema
 from plantsolve.solvers.skipped_input import truncated_file
-from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
+from plantsolve.solvers.step_file import TRAILER_BYTES, blank_strings_and_comments, line_ends, where_cut
 
 MAX_SKIPPED_LISTED = 200
 VOLUMES_DEPEND = "the zones' volumes differ by the cube of their ratio"  # on the project's length unit
@@ -103,13 +103,14 @@ def parse_ifc(content: bytes) -> dict:
     warnings = []
     cut = where_cut(text[-TRAILER_BYTES:].encode("latin-1", errors="replace"))
     if cut is not None:  # the spaces read are whole; those after the cut, and relations written last, are not
-        line = text.count("\n", 0, len(text.rstrip())) + 1
+        line = line_ends(text, 0, len(text.rstrip())) + 1
         warnings.append(truncated_file(line, f"the file does not end with 'END-ISO-10303-21;' ({cut}): it was cut "
                                        "in transfer or export. The spaces, quantities and relations after the cut "
                                        "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
     was_cut = f" (the file was cut short: {cut})" if cut else ""
-    left_out = lines_left_out(text, model, cut is not None)
-    for found in (left_out, lines_of_another_schema(text, model)):
+    blanked = blank_strings_and_comments(text)  # scanned for instances: a ';#3=B' in a string defines none
+    left_out = lines_left_out(blanked, model, cut is not None)
+    for found in (left_out, lines_of_another_schema(blanked, model)):
         if found is not None:
             warnings.append(found.model_dump())
     if not spaces:

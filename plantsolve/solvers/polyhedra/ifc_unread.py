@@ -16,8 +16,10 @@ from typing import Any
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.ifc_schema import first_misfit
+from plantsolve.solvers.step_file import line_ends
 
-# an instance's definition: '#12=' after a line's start or the ';' ending the one before (several may share a line)
+# an instance's definition: '#12=' after a line's start or the ';' ending the one before (several may share a line),
+# looked for in the text with its strings and comments blanked
 _DEFINITION = re.compile(r"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
 _NAMED = 5
 _LISTED_LINES = 100
@@ -25,7 +27,8 @@ _LISTED_LINES = 100
 
 def lines_left_out(text: str, model: Any, cut: bool) -> Diagnostic | None:
     """The warning naming the entities and lines the model lacks, or None when it holds every instance the text
-    defines. A ``cut`` file's last definition is not counted: the truncation warning says it."""
+    defines. A ``cut`` file's last definition is not counted: the truncation warning says it. ``text``: its strings
+    and comments blanked (a ';#3=B' in one defines nothing)."""
     import ifcopenshell  # noqa: PLC0415  (third-party, only needed for IFC)
 
     defined = sum(1 for _ in _DEFINITION.finditer(text)) - (1 if cut else 0)
@@ -49,7 +52,7 @@ def lines_left_out(text: str, model: Any, cut: bool) -> Diagnostic | None:
                 known[name] = False
         is_foreign = bool(name) and not known[name]
         if (name not in foreign) if is_foreign else len(unread) < _LISTED_LINES:
-            line += text.count("\n", counted_to, match.start(1))
+            line += line_ends(text, counted_to, match.start(1))
             counted_to = match.start(1)
             if is_foreign:
                 foreign[name] = line
@@ -78,12 +81,12 @@ def lines_of_another_schema(text: str, model: Any) -> Diagnostic | None:
     IfcOpenShell pads or drops the values without a word, and reads those it keeps by their place in the header's
     schema: a quantity or a geometry parameter may be read from another attribute. The first instance of each entity
     is looked at, the text read until each entity the model holds was met (an entity the schema lacks is
-    :func:`lines_left_out`'s)."""
+    :func:`lines_left_out`'s). ``text``: its strings and comments blanked."""
     schema = model.schema_identifier
     misfit = first_misfit(text, _DEFINITION.finditer(text), schema, unknown=False, limit=len(model.types()))
     if misfit is None:
         return None
-    at = text.count("\n", 0, misfit.start) + 1
+    at = line_ends(text, 0, misfit.start) + 1
     fits = misfit.fits
     return Diagnostic(code="ifc_schema_misfit", message=(
         f"line {at}: #{misfit.number}={misfit.name} is written with {misfit.written} attribute value(s), and "

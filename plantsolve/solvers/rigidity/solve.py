@@ -342,7 +342,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                                 np.array([positions[u.id] for u in unknown], dtype=float).reshape(-1, 3))
     # a model of parts is one build unless its drawing says otherwise (bodies and joints: the joints are the user's)
     apart = one_piece_verdict(piece_results) if request.parts else None
-    missing = missing_submodels_verdict((request.source or {}).get("missing_submodels") or {})
+    source = request.source or {}
+    missing = missing_submodels_verdict(source.get("missing_submodels") or {}, source.get("missing_submodels_count"))
     # the verdicts first, the gravest first
     warnings = [v for v in (missing, coverage, apart) if v is not None] + warnings
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={

@@ -524,6 +524,7 @@ def parse_ldraw(text: str) -> dict:
                                        "submodel_placements": placements,
                                        "missing_submodels": {name: list(lines) for name, _, lines
                                                              in list(missing.values())[:MAX_SKIPPED_LISTED]},
+                                       "missing_submodels_count": len(missing),
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
                                        "warnings": warnings}}
 

@@ -95,11 +95,13 @@ def names_lines(missing: object) -> bool:
         for name, lines in missing.items())
 
 
-def missing_submodels_verdict(missing: object) -> Diagnostic | None:
+def missing_submodels_verdict(missing: object, count: object = None) -> Diagnostic | None:
     """``submodels_missing`` when the file places sub-models it does not hold (``missing``: name -> the lines placing
-    it; a value of another shape, which intake refuses in a written request, says nothing the verdict can name)."""
+    it, the first of them when the reader listed only so many; ``count``: how many there are, as the reader counted;
+    a value of another shape, which intake refuses in a written request, says nothing the verdict can name)."""
     if not missing or not names_lines(missing):
         return None
+    total = max(count, len(missing)) if type(count) is int else len(missing)
 
     def placed(name: str, lines: list[int]) -> str:
         if not lines:
@@ -109,8 +111,9 @@ def missing_submodels_verdict(missing: object) -> Diagnostic | None:
 
     named = ", ".join(placed(name, lines) for name, lines in list(missing.items())[:5])
     return Diagnostic(
-        code="submodels_missing", message=f"rigidity not determined: the file places {len(missing)} sub-model(s) "
-        f"it does not hold — {named}{' and more' if len(missing) > 5 else ''}: their parts are not analysed, and what "
+        code="submodels_missing", message=f"rigidity not determined: the file places {total} sub-model(s) "
+        f"it does not hold — {named}{' and more' if total > 5 else ''}"
+        f"{f' ({len(missing)} listed in details)' if total > len(missing) else ''}: their parts are not analysed, and what "
         "they would join or leave loose cannot be told, so dof and the pieces are of the parts present only (rigid is "
         "null); send the model with its sub-models as one .mpd",
         details={"missing_submodels": sorted(missing), "lines": {name: lines for name, lines in missing.items()}})

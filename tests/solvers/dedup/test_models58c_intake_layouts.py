@@ -72,7 +72,7 @@ def test_a_context_with_a_semicolon_in_its_identifier_is_judged_whole():
 
 def test_the_world_check_runs_on_the_first_chunk_alone_even_without_line_ends(monkeypatch):
     calls = []
-    monkeypatch.setattr(validation, "refuse_unplaceable_world", lambda text, schema: calls.append(len(text)))
+    monkeypatch.setattr(validation, "refuse_unplaceable_world", lambda text, schema, blanked=None: calls.append(len(text)))
     monkeypatch.setattr(validation, "refuse_other_schema", lambda *args: None)  # the flag alone tested
     filler = "".join(f"#{900000 + k}=IFCCARTESIANPOINT((0.,0.,{k}.));" for k in range(40_000))  # 1.4 MB
     _intake(ZOO.replace("DATA;\n", "DATA;\n" + filler, 1).replace("\n", "\r"))
