@@ -126,6 +126,10 @@ def test_a_service_started_on_spools_left_by_killed_processes_stores_the_waiting
         view = wait_for(client, str(waiting), timeout=60)
         _until(lambda: not (settings.resolved_artifact_dir / spool.pending_path(ended)).exists(), 30,
                "the start-up sweep left the cancelled job's spool")
+        # the stored job's spool goes after its commit: waited for before the service stops (a stop in between
+        # leaves it to the next start's sweep)
+        _until(lambda: not (settings.resolved_artifact_dir / spool.PREFIX).exists(), 30,
+               "the stored job's spool was not removed after its commit")
     assert view["status"] == "succeeded" and view["attempts"][-1]["outcome"] == "succeeded"
     assert _runs(markers) == 2  # each solved once
     assert not (settings.resolved_artifact_dir / spool.PREFIX).exists()
