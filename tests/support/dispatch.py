@@ -28,3 +28,10 @@ def stored_upload(ctx, kind: str, name: str, content: bytes) -> uuid.UUID:
     new = NewJob(ctx.spec(kind), job_id, uuid.uuid4().hex, None,
                  {"input_kind": "upload", "input_file": blob.key, "input_filename": name, "input_options": None})
     return JobService(ctx, Recorder()).store(new).job.id
+
+
+def queued_test_job(ctx) -> uuid.UUID:
+    """A job of the test kind ``test-compute`` submitted through the job service (nothing dispatched): queued."""
+    from plantsolve.jobs.service import JobService
+
+    return JobService(ctx, Recorder(), readers=[]).submit_json("test-compute", b'{"values": [1]}', None).job.id

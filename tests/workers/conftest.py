@@ -5,6 +5,8 @@ from __future__ import annotations
 import pytest
 
 from plantsolve.jobs import intake
+from plantsolve.jobs.context import ServiceContext
+from tests.conftest import service_settings
 
 
 @pytest.fixture(autouse=True)
@@ -17,3 +19,11 @@ def fresh_forkserver_starts(monkeypatch):
         if name != "_lock":
             monkeypatch.setattr(gate, name, value)
     return gate
+
+
+@pytest.fixture
+def ctx(tmp_path):
+    """A migrated service context of the embedded job processes (a module may define its own)."""
+    context = ServiceContext.create(service_settings(tmp_path, embedded_mode="process"), migrate=True)
+    yield context
+    context.close()

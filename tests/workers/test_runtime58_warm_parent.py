@@ -21,24 +21,14 @@ from fastapi.testclient import TestClient
 from plantsolve.app.main import create_app
 from plantsolve.jobs import intake
 from plantsolve.jobs.backoff import Backoff
-from plantsolve.jobs.context import ServiceContext
-from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import SolverSpec
 from plantsolve.workers import processes
 from plantsolve.workers.processes import ProcessDispatcher, warm_modules
 from tests.conftest import service_settings
-from tests.support.dispatch import Recorder
+from tests.support.dispatch import queued_test_job
 
 
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path, embedded_mode="process"), migrate=True)
-    yield context
-    context.close()
-
-
-def _queued(ctx) -> uuid.UUID:
-    return JobService(ctx, Recorder(), readers=[]).submit_json("test-compute", b'{"values": [1]}', None).job.id
+_queued = queued_test_job
 
 
 def test_the_warm_parent_imports_every_kinds_solver_and_the_upload_readers(tmp_path, monkeypatch):

@@ -13,22 +13,19 @@ import time
 import uuid
 from multiprocessing import forkserver
 
-import pytest
 from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from plantsolve.jobs import intake
 from plantsolve.jobs.backoff import Backoff
-from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import INFRASTRUCTURE
 from plantsolve.jobs.intake import ForkserverStarts
-from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.kinds import load_kinds
 from plantsolve.workers import processes
 from plantsolve.workers.processes import ProcessDispatcher
 from tests.conftest import service_settings
-from tests.support.dispatch import Recorder
+from tests.support.dispatch import queued_test_job
 
 PLUGINS = ("tests.support.kinds",)
 
@@ -82,15 +79,7 @@ def test_uploads_that_saw_one_forkserver_die_pause_nothing(tmp_path, fresh_forks
     assert fresh_forkserver_starts.failures == 1 and fresh_forkserver_starts.pause_left() == 0
 
 
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path, embedded_mode="process"), migrate=True)
-    yield context
-    context.close()
-
-
-def _queued(ctx) -> uuid.UUID:
-    return JobService(ctx, Recorder(), readers=[]).submit_json("test-compute", b'{"values": [1]}', None).job.id
+_queued = queued_test_job
 
 
 class _Killed:

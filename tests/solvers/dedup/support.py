@@ -10,7 +10,9 @@ import ifcopenshell
 import ifcopenshell.geom
 import ifcopenshell.util.unit
 
-from plantsolve.solvers.base import Solved, StoredInput
+import pytest
+
+from plantsolve.solvers.base import InputRejected, Solved, StoredInput
 from plantsolve.solvers.dedup import SPEC, compaction, postpass, sharing
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
@@ -18,6 +20,20 @@ from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.solve import solve
 from plantsolve.solvers.dedup.upload import parse_upload
 from plantsolve.solvers.dedup.worldgeom import world_points
+
+
+def intake_text(text: str, encoding: str = "utf-8") -> None:
+    """The submission check of an IFC text uploaded as ``model.ifc`` (raises :class:`InputRejected` when refused)."""
+    source = StoredInput.from_bytes("model.ifc", text.encode(encoding))
+    SPEC.check_input(SPEC.input_of(parse_upload(source, {}), source))
+
+
+def intake_refusal(text: str, encoding: str = "utf-8") -> str:
+    """The one message the submission check refuses ``text`` with."""
+    with pytest.raises(InputRejected) as refused:
+        intake_text(text, encoding)
+    (error,) = refused.value.errors
+    return error.msg
 
 
 def upload(model: ifcopenshell.file, name: str = "model.ifc", **options) -> IfcSource:

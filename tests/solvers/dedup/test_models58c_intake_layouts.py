@@ -8,25 +8,15 @@ from __future__ import annotations
 
 import pytest
 
-from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.dedup import SPEC, validation
-from plantsolve.solvers.dedup.upload import parse_upload
+from plantsolve.solvers.dedup import validation
 from tests.conftest import REPO
+from tests.solvers.dedup.support import intake_refusal, intake_text
 
 ZOO = (REPO / "examples" / "dedup" / "zoo_ifc2x3.ifc").read_text()
 TUNNEL = (REPO / "examples" / "dedup" / "tunnel_3rings.ifc").read_text()
 
 
-def _intake(text: str) -> None:
-    source = StoredInput.from_bytes("model.ifc", text.encode())
-    SPEC.check_input(SPEC.input_of(parse_upload(source, {}), source))
-
-
-def _refused(text: str) -> str:
-    with pytest.raises(InputRejected) as refused:
-        _intake(text)
-    (error,) = refused.value.errors
-    return error.msg
+_intake, _refused = intake_text, intake_refusal
 
 
 def _two_per_line(text: str) -> str:

@@ -9,25 +9,20 @@ from __future__ import annotations
 import pytest
 
 from plantsolve.solvers import step_file
-from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.dedup import SPEC, ifcio, validation
-from plantsolve.solvers.dedup.upload import parse_upload
+from plantsolve.solvers.dedup import ifcio, validation
 from tests.conftest import REPO
+from tests.solvers.dedup.support import intake_refusal, intake_text
 
 ZOO = (REPO / "examples" / "dedup" / "zoo_ifc2x3.ifc").read_text()
 AS_IFC4 = ZOO.replace("FILE_SCHEMA(('IFC2X3'))", "FILE_SCHEMA(('IFC4'))")  # its IfcColumn has 8 attributes, IFC4's 9
 
 
 def _intake(text: str) -> None:
-    source = StoredInput.from_bytes("model.ifc", text.encode("latin-1"))
-    SPEC.check_input(SPEC.input_of(parse_upload(source, {}), source))
+    intake_text(text, "latin-1")
 
 
 def _refused(text: str) -> str:
-    with pytest.raises(InputRejected) as refused:
-        _intake(text)
-    (error,) = refused.value.errors
-    return error.msg
+    return intake_refusal(text, "latin-1")
 
 
 def _after_data(text: str, written: str) -> str:
