@@ -719,6 +719,9 @@ def parse_stl(content: bytes) -> dict:
     elif not ascii_like and not binary_like and _is_text(content[84:4096]):
         # text under an .stl name (an OBJ, a CSV) read as a binary STL cut short: its characters as garbage floats
         raise reject("not an STL file: it is text, and not an ASCII STL ('solid … facet … endsolid')")
+    elif not ascii_like and not binary_like and _another_format(content):
+        # a PLY, a STEP or IFC model, a zip under an .stl name: read as a binary STL cut short, garbage floats
+        raise reject("not an STL file: its first bytes are another format's")
     elif not ascii_like and 84 < len(content) < 84 + 50 * declared:
         whole = (len(content) - 84) // 50  # a binary file cut short: its whole triangles are read
         if whole == 0:
@@ -788,6 +791,13 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _another_format(content: bytes) -> bool:
+    """Whether the file's first bytes are those of a format :func:`file_holds` knows by its signature alone (a binary
+    STL's 80-byte header is free text, so only signatures, not a guess from its lines, tell it apart)."""
+    holds = file_holds(content[:65536]) or ""
+    return holds.startswith(("a PLY", "an IFC", "a STEP", "a zip", "a gbXML", "an XML", "a JSON"))
 
 
 def _read_stl(content: bytes) -> dict:
