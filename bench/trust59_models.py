@@ -125,6 +125,31 @@ def _gbxml_surfaces_reversed(text: str) -> str:
     return rest[:first] + "".join(reversed(surfaces)) + rest[first:]
 
 
+def _step_wrapped(text: str, width: int = 80) -> str:
+    """The DATA section's instances wrapped after commas at ``width`` characters, as some exporters write them."""
+    out = []
+    for line in text.splitlines():
+        while line.startswith("#") and len(line) > width and "," in line[:width]:
+            cut = line.rindex(",", 0, width) + 1
+            out.append(line[:cut])
+            line = line[cut:]
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def _two_solids_stl(first: str) -> str:
+    """Two box rooms as two named solids of one ASCII STL, ``first`` written first."""
+    solids = {}
+    for name, x0 in (("a", 0.0), ("b", 6.0)):
+        c = [(x0 + x, y, z) for x in (0, 5) for y in (0, 4) for z in (0, 3)]
+        quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+        facets = "".join("facet normal 0 0 0\nouter loop\n" + "".join(
+            "vertex {} {} {}\n".format(*c[i]) for i in t) + "endloop\nendfacet\n"
+            for a, b, c_, d in quads for t in ((a, b, c_), (a, c_, d)))
+        solids[name] = f"solid {name}\n{facets}endsolid {name}\n"
+    return solids[first] + solids["b" if first == "a" else "a"]
+
+
 def _ply() -> bytes:
     return (ROOT / "examples/tube/scan.ply").read_bytes()
 
@@ -147,6 +172,9 @@ def polyhedra_cases() -> list[tuple]:
         ("polyhedra", "binary STL cut short (last triangle half)", "room.stl", room_m[:-25], None, "flag"),
         ("polyhedra", "binary STL with a NaN vertex", "room.stl",
          room_m[:84 + 12] + struct.pack("<f", float("nan")) + room_m[84 + 16:], None, "flag"),
+        ("polyhedra", "clean ASCII STL of two solids", "rooms.stl", _two_solids_stl("a").encode(), None, "same"),
+        ("polyhedra", "ASCII STL solids in the other order", "rooms.stl", _two_solids_stl("b").encode(), None,
+         "same"),
         ("polyhedra", "PLY scan named .stl", "room.stl", _ply(), None, "flag"),
         ("polyhedra", "PLY scan named .obj", "room.obj", _ply(), None, "flag"),
         ("polyhedra", "PCF named .idf", "zones.idf", (ROOT / "examples/alignment/ladder.pcf").read_bytes(), None,
@@ -158,6 +186,10 @@ def polyhedra_cases() -> list[tuple]:
          None, "flag"),
         ("polyhedra", "SketchUp OBJ drawn in mm, header dropped", "rooms.obj", _obj_scaled(obj, 1000).encode(), None,
          "flag"),
+        ("polyhedra", "OBJ room drawn as one face listed both ways", "rooms.obj",
+         b"o room\nv 0 0 0\nv 5 0 0\nv 5 4 0\nv 0 4 0\nf 1 2 3 4\nf 4 3 2 1\n", None, "flag"),
+        ("polyhedra", "SketchUp OBJ with a NaN vertex", "rooms.obj",
+         _replace_once(obj, "v 4.000000 3.000000 0.000000", "v nan 3.000000 0.000000").encode(), None, "flag"),
         ("polyhedra", "SketchUp OBJ drawn in cm, header dropped", "rooms.obj", _obj_scaled(obj, 100).encode(), None,
          "flag"),
         ("polyhedra", "clean idf", "zones.idf", idf.encode(), None, "same"),
@@ -194,6 +226,10 @@ def rigidity_cases() -> list[tuple]:
     first_part = re.search(r"(?m)^1 \S+ (\S+) ", wall)
     return [
         ("rigidity", "clean .mpd (radar truck)", "radar.mpd", radar.encode(), None, "same"),
+        ("rigidity", "main model turned 90 degrees (radar truck)", "radar.mpd",
+         _ldraw_moved(radar, True, 0).encode(), None, "same"),
+        ("rigidity", "main model 1e6 LDU along (radar truck)", "radar.mpd", _ldraw_moved(radar, False, 1e6).encode(),
+         None, "same"),
         ("rigidity", "sub-models in reverse order (radar truck)", "radar.mpd", _mpd_submodels_reversed(radar).encode(),
          None, "same"),
         ("rigidity", ".mpd cut mid-sub-model (radar truck)", "radar.mpd", _mpd_cut_mid_submodel(radar).encode(),
@@ -204,10 +240,6 @@ def rigidity_cases() -> list[tuple]:
         ("rigidity", "sub-models in reverse order (TIE)", "tie.mpd", _mpd_submodels_reversed(tie).encode(), None,
          "same"),
         ("rigidity", ".mpd cut mid-sub-model (TIE)", "tie.mpd", _mpd_cut_mid_submodel(tie).encode(), None, "flag"),
-        ("rigidity", "main model turned 90 degrees (radar truck)", "radar.mpd",
-         _ldraw_moved(radar, True, 0).encode(), None, "same"),
-        ("rigidity", "main model 1e6 LDU along (radar truck)", "radar.mpd", _ldraw_moved(radar, False, 1e6).encode(),
-         None, "same"),
         ("rigidity", "clean ldr (hinged wall)", "wall.ldr", wall.encode(), None, "same"),
         ("rigidity", "ldr turned 90 degrees (hinged wall)", "wall.ldr", _ldraw_moved(wall, True, 0).encode(), None,
          "same"),
@@ -217,6 +249,12 @@ def rigidity_cases() -> list[tuple]:
          (wall[:first_part.start(1)] + "nan" + wall[first_part.end(1):]).encode(), None, "flag"),
         ("rigidity", "ldr a position 1e12 (hinged wall)", "wall.ldr",
          (wall[:first_part.start(1)] + "1e12" + wall[first_part.end(1):]).encode(), None, "flag"),
+        ("rigidity", "ldr separated by tabs, with a byte-order mark (hinged wall)", "wall.ldr",
+         b"\xef\xbb\xbf" + re.sub(r"(?m)^(1) ", "1\t", wall).encode(), None, "same"),
+        ("rigidity", "two bricks, the second placed by a scaling matrix", "two.ldr",
+         b"1 16 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 16 0 -24 0 2 0 0 0 2 0 0 0 2 3001.dat\n", None, "flag"),
+        ("rigidity", "two bricks, the second's position NaN", "two.ldr",
+         b"1 16 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 16 nan -24 0 1 0 0 0 1 0 0 0 1 3001.dat\n", None, "flag"),
         ("rigidity", "PLY scan named .ldr", "model.ldr", _ply(), None, "flag"),
         ("rigidity", "binary STL named .ldr", "model.ldr", _box_stl_binary(5, 4, 3), None, "flag"),
         ("rigidity", "perfmap CSV named .mpd", "model.mpd", (ROOT / "examples/perfmap/n3_fan_map.csv").read_bytes(),
@@ -231,6 +269,9 @@ def dedup_cases() -> list[tuple]:
     return [
         ("dedup", "clean ifc (zoo)", "zoo.ifc", zoo.encode(), None, "same"),
         ("dedup", "zoo renumbered and reordered", "zoo.ifc", _step_renumbered_shuffled(zoo).encode(), None, "same"),
+        ("dedup", "zoo wrapped at 80 columns", "zoo.ifc", _step_wrapped(zoo).encode(), None, "same"),
+        ("dedup", "zoo with CRLF line ends and a byte-order mark", "zoo.ifc",
+         b"\xef\xbb\xbf" + zoo.replace("\n", "\r\n").encode(), None, "same"),
         ("dedup", "zoo cut mid-entity (80 %)", "zoo.ifc", _cut_mid_data(zoo, 0.8).encode(), None, "flag"),
         ("dedup", "zoo cut mid-entity (30 %)", "zoo.ifc", _cut_mid_data(zoo, 0.3).encode(), None, "flag"),
         ("dedup", "zoo stated MILLI over metres", "zoo.ifc", zoo_mm.encode(), None, "flag"),

@@ -77,8 +77,8 @@ def implausible(zones: Sequence[Mapping[str, Any]], measures: Mapping[str, Mappi
             size = measures.get(zone["id"]) or {}
             value = {"volume": zone.get("volume"), "floor area": zone.get("floor_area"), "height": size.get("height"),
                      "horizontal extent": size.get("extent")}[rng.quantity]
-            if value is None or value <= 0:  # no volume (not closed), no floor: nothing to judge
-                continue
+            if value is None or (value <= 0 and rng.quantity != "volume"):  # not closed, no floor: nothing to judge
+                continue  # a closed zone of no volume (a face listed both ways round, all in one plane) is judged
             si = value * METRES[units] ** rng.power
             if not rng.low <= si <= rng.high:
                 found.append((zone["id"], value, si))
@@ -91,7 +91,9 @@ def implausible(zones: Sequence[Mapping[str, Any]], measures: Mapping[str, Mappi
         in_si = f" = {mix[1]:.4g} m{power}" if mix and mix[0] != "m" else ""
         file_value = si / read_as[1] ** rng.power
         likely = (f"the numbers look like {mix[0]} read as {read_as[0]} ({file_value:.4g} {mix[0]}{power}{in_si}): "
-                  f"{hint.format(unit=mix[0])}") if mix else "no length unit makes it plausible: check the coordinates"
+                  f"{hint.format(unit=mix[0])}") if mix else (
+            "its faces enclose nothing (a surface listed both ways round, or every vertex in one plane): check the "
+            "faces" if si <= 0 else "no length unit makes it plausible: check the coordinates")
         more = f" (and {len(found) - 1} more zone(s))" if len(found) > 1 else ""
         warnings.append(Diagnostic(code=rng.code, message=(
             f"Zone {zone_id!r}{more}: {rng.quantity} {value:.4g} {unit_text} is outside the plausible "

@@ -459,6 +459,11 @@ def parse_ldraw(text: str) -> dict:
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
 
     expand(main, np.eye(3), np.zeros(3), "", (main,))
+    # what the skipped placements would have placed, counted before a line repeated by its sub-model's placements is
+    # said once: a verdict on the model needs the parts read to be most of it (a placement a sub-model's missing
+    # section or its own loop skips is not counted: submodels_missing says the one, the other places nothing)
+    not_read = sum(1 for entry in skipped if not entry["reason"].startswith(("places sub-model", "sub-model ",
+                                                                             "line type ")))
     # a line of a sub-model placed n times is skipped n times: one line of the file, said once
     first_of_line: dict[int, dict] = {}
     for entry in skipped:
@@ -526,6 +531,7 @@ def parse_ldraw(text: str) -> dict:
                                                              in list(missing.values())[:MAX_SKIPPED_LISTED]},
                                        "missing_submodels_count": len(missing),
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
+                                       "placements_not_read": not_read,
                                        "warnings": warnings}}
 
 

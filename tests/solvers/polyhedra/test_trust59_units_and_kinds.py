@@ -81,3 +81,12 @@ def test_a_ply_scan_named_stl_is_refused_naming_ply():
 def test_a_binary_stl_cut_short_is_still_read_with_its_whole_triangles():
     result = solved("room.stl", box_stl(5, 4, 3)[:-25])
     assert "truncated_file" in codes(result)
+
+
+def test_a_closed_zone_of_no_volume_is_named():
+    # one face listed both ways round: every edge borne twice, so closed, and its volume 0 m³ was given without a word
+    sheet = solved("sheet.obj", b"o sheet\nv 0 0 0\nv 5 0 0\nv 5 4 0\nv 0 4 0\nf 1 2 3 4\nf 4 3 2 1\n")
+    assert sheet.zones[0].volume == 0.0
+    (warning,) = [w for w in sheet.report.warnings if w.code == "implausible_zone_volume"]
+    assert warning.details["zones"] == {"sheet": 0.0} and "enclose nothing" in warning.message
+    assert warning.details["likely_file_unit"] is None
