@@ -241,6 +241,8 @@ def rigidity_cases() -> list[tuple]:
          "same"),
         ("rigidity", ".mpd cut mid-sub-model (TIE)", "tie.mpd", _mpd_cut_mid_submodel(tie).encode(), None, "flag"),
         ("rigidity", "clean ldr (hinged wall)", "wall.ldr", wall.encode(), None, "same"),
+        ("rigidity", "ldr with the form's units mm, contact_tolerance 0.5 (hinged wall)", "wall.ldr", wall.encode(),
+         {"units": "mm", "contact_tolerance": 0.5}, "flag"),
         ("rigidity", "ldr turned 90 degrees (hinged wall)", "wall.ldr", _ldraw_moved(wall, True, 0).encode(), None,
          "same"),
         ("rigidity", "ldr 1e7 LDU along (hinged wall)", "wall.ldr", _ldraw_moved(wall, False, 1e7).encode(), None,

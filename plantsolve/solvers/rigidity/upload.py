@@ -703,7 +703,25 @@ def parse_upload(source: StoredInput, options: dict | None) -> RigidityRequest:
     body = json_object(text) if source.extension == ".json" else parse_ldraw(text)
     if source.extension == ".json":
         _refuse_other_request(body)
-    return request_of_file(body, options, FORM)
+    request = request_of_file(body, options, FORM)
+    if source.extension != ".json" and isinstance(options, dict) and options.get("units") is not None:
+        request.source["warnings"].append(_form_units_not_used(request.units, options))
+    return request
+
+
+def _form_units_not_used(units: str, options: dict) -> dict:
+    """The form's ``units`` beside an LDraw file, which states its own: its positions, the result's lengths and
+    ``contact_tolerance`` are LDU whatever the form says (a tolerance meant in millimetres is 2.5 times as large in
+    LDU), so the unit the user meant is said not to be used."""
+    tolerance = options.get("contact_tolerance", (options.get("options") or {}).get("contact_tolerance")
+                            if isinstance(options.get("options"), dict) else None)
+    said = (f"; contact_tolerance {tolerance} is read in LDU too ({float(tolerance) * 0.4:g} mm), not in {units}"
+            if isinstance(tolerance, (int, float)) and not isinstance(tolerance, bool) else "")
+    return Diagnostic(code="units_not_used", message=(
+        f"options.units {units!r} is not used: an LDraw file states its own unit, the LDraw unit (1 LDU = 0.4 mm), in "
+        f"which its positions are read and the result's lengths are given{said}. options.units applies to the bodies "
+        "of a JSON request."), details={"units": units, "file_unit": "ldu",
+                                        "contact_tolerance_ldu": tolerance if said else None}).model_dump()
 
 
 MODEL_FIELDS = ("bodies", "joints", "parts")
