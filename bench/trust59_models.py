@@ -197,6 +197,9 @@ def polyhedra_cases() -> list[tuple]:
          _replace_once(idf, "Counterclockwise,", "Clockwise,").encode(), None, "flag"),
         ("polyhedra", "idf cut mid-object (in a vertex)", "zones.idf", _idf_cut_mid_object(idf).encode(), None,
          "flag"),
+        ("polyhedra", "idf without office B's surfaces (its Zone kept)", "zones.idf",
+         "".join(o for o in re.split(r"(?m)^(?=\S)", idf) if not ("Office B Thermal Zone" in o and o.startswith(
+             ("BuildingSurface", "Fenestration")))).encode(), None, "flag"),
         ("polyhedra", "idf zone multiplier 1e6", "zones.idf",
          re.sub(r"(?m)^(\s*)1,(\s*!- Multiplier)", r"\g<1>1000000,\2", idf, count=1).encode(), None, "flag"),
         ("polyhedra", "idf a vertex NaN", "zones.idf",
