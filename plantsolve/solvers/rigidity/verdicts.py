@@ -65,13 +65,14 @@ def coverage_verdict(known: int, unknown_numbers: Sequence[str], unknown_positio
     share = (elements + not_read) / (known + elements + not_read)
     if share < 1.0 - KNOWN_MAJORITY:
         return None
-    unread = f"; {not_read} placement(s) whose lines could not be read (skipped_lines)" if not_read else ""
+    counted = [(f"{len(unknown_numbers)} part(s) not in the catalogue, {elements} element(s) counting a chain of "
+                "segments as one")] if len(unknown_numbers) else []
+    counted += [f"{not_read} placement(s) whose lines could not be read (skipped_lines)"] if not_read else []
     return Diagnostic(
-        code="rigidity_not_determined", message=f"rigidity not determined: the parts not in the catalogue or not "
-        f"read are {share:.0%} of the model ({len(unknown_numbers)} unknown part(s), {elements} element(s) counting "
-        f"a chain of segments as one{unread}; {known} known part(s)), so dof, rigid and the pieces, counted over the "
-        f"known parts only, cover no majority of it (rigid is null; a verdict needs the known parts above "
-        f"{KNOWN_MAJORITY:.0%})",
+        code="rigidity_not_determined", message=f"rigidity not determined: the parts "
+        f"{'not in the catalogue or not read' if not_read else 'not in the catalogue'} are {share:.0%} of the model "
+        f"({'; '.join(counted)}; {known} known part(s)), so dof, rigid and the pieces, counted over the known parts "
+        f"only, cover no majority of it (rigid is null; a verdict needs the known parts above {KNOWN_MAJORITY:.0%})",
         details={"unknown_share": round(share, 4), "unknown_parts": len(unknown_numbers),
                  "unknown_elements": elements, "placements_not_read": not_read, "known_parts": known,
                  "known_share_needed": KNOWN_MAJORITY})
