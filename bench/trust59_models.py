@@ -306,8 +306,8 @@ def child(kinds: list[str], only: list[str] | None) -> None:
 
 def run(tree: Path, kinds: list[str], only: list[str] | None) -> list[dict]:
     done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds,
-                           *(["--cases", *only] if only else [])], cwd=tree, capture_output=True, text=True, check=False,
-                          env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"})
+                           *(["--cases", *only] if only else [])], cwd=tree, capture_output=True, text=True,
+                          check=False, env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"})
     if done.returncode:
         sys.stderr.write(done.stderr[-3000:])
     return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]

@@ -2,8 +2,9 @@
 
 - ``rigidity_not_determined`` (NOT DETERMINED): the parts not in the catalogue, with the placements the reader could
   not read, are at least half of the model (its known parts no majority), so ``dof``, ``rigid`` and the pieces,
-  counted over the known parts only, say nothing of the model: ``rigid`` is null. A flexible element an editor draws as a chain of short segments (an LSynth hose or
-  rope, a hose of segments 754) is one element, not hundreds of parts (:func:`unknown_elements`).
+  counted over the known parts only, say nothing of the model: ``rigid`` is null. A flexible element an editor draws
+  as a chain of short segments (an LSynth hose or rope, a hose of segments 754) is one element, not hundreds of parts
+  (:func:`unknown_elements`).
 - ``one_piece_not_determined`` (NOT DETERMINED): a model is one build unless its drawing says otherwise, so known parts
   that come apart into pieces besides the held sub-builds (a minifigure, a whole sub-model standing clear) and the
   separate builds the drawing places apart (a second vehicle, spares laid aside) are a build that falls apart as
