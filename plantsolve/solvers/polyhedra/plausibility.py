@@ -37,6 +37,10 @@ SUPERSCRIPT = {1: "", 2: "²", 3: "³"}
 # a building's tallest zone: a plenum or a crawlspace may be 0.5 m high, but a building of several zones none of which
 # a person stands in is feet (or inches) read as metres, which gives rooms of plausible volume one by one
 TALLEST = Range("implausible_building_height", "tallest zone's height", 1, 1.8, 1000.0, 3.0)
+# and the other way: a model whose every zone stands over 50 m high (a hangar's or a nave's height, each alone) is
+# inches read as metres, the unit an STL or an OBJ without a header leaves to the request: 2.4-4 m rooms read as
+# 94-157 m ones, each under the single zone's 300 m and 1e7 m³
+LOWEST = Range("implausible_lowest_zone_height", "lowest zone's height", 1, 1.8, 50.0, 3.0)
 
 
 def _mix_up(value_si: float, rng: Range, read_as: tuple[str, float]) -> tuple[str, float] | None:
@@ -73,8 +77,8 @@ def implausible(zones: Sequence[Mapping[str, Any]], measures: Mapping[str, Mappi
             size = measures.get(zone["id"]) or {}
             value = {"volume": zone.get("volume"), "floor area": zone.get("floor_area"), "height": size.get("height"),
                      "horizontal extent": size.get("extent")}[rng.quantity]
-            if value is None or value <= 0:  # no volume (not closed), no floor: nothing to judge
-                continue
+            if value is None or (value <= 0 and rng.quantity != "volume"):  # not closed, no floor: nothing to judge
+                continue  # a closed zone of no volume (a face listed both ways round, all in one plane) is judged
             si = value * METRES[units] ** rng.power
             if not rng.low <= si <= rng.high:
                 found.append((zone["id"], value, si))
@@ -87,7 +91,9 @@ def implausible(zones: Sequence[Mapping[str, Any]], measures: Mapping[str, Mappi
         in_si = f" = {mix[1]:.4g} m{power}" if mix and mix[0] != "m" else ""
         file_value = si / read_as[1] ** rng.power
         likely = (f"the numbers look like {mix[0]} read as {read_as[0]} ({file_value:.4g} {mix[0]}{power}{in_si}): "
-                  f"{hint.format(unit=mix[0])}") if mix else "no length unit makes it plausible: check the coordinates"
+                  f"{hint.format(unit=mix[0])}") if mix else (
+            "its faces enclose nothing (a surface listed both ways round, or every vertex in one plane): check the "
+            "faces" if si <= 0 else "no length unit makes it plausible: check the coordinates")
         more = f" (and {len(found) - 1} more zone(s))" if len(found) > 1 else ""
         warnings.append(Diagnostic(code=rng.code, message=(
             f"Zone {zone_id!r}{more}: {rng.quantity} {value:.4g} {unit_text} is outside the plausible "
@@ -119,4 +125,28 @@ def building_too_low(measures: Mapping[str, Mapping[str, float]], units: str, hi
         f"{TALLEST.low / METRES[units]:.3g} {units} high, as a room one stands in is; {likely}."),
         details={"quantity": TALLEST.quantity, "units": units, "tallest_zone": zone, "height": value,
                  "zones": len(heights), "plausible_minimum": TALLEST.low / METRES[units],
+                 "likely_file_unit": mix[0] if mix else None})]
+
+
+def zones_all_too_tall(measures: Mapping[str, Mapping[str, float]], units: str, hint: str,
+                       read_as: tuple[str, float] | None = None) -> list[Diagnostic]:
+    """``implausible_lowest_zone_height`` when every zone with a height stands over :data:`LOWEST`'s 50 m, naming
+    the lowest and the unit that would make it a storey's."""
+    read_as = read_as or (units, METRES[units])
+    heights = {zone: size["height"] for zone, size in measures.items() if size.get("height", 0) > 0}
+    if not heights:
+        return []
+    zone, value = min(heights.items(), key=lambda item: item[1])
+    si = value * METRES[units]
+    if si <= LOWEST.high:
+        return []
+    mix = _mix_up(si, LOWEST, read_as)
+    likely = (f"the numbers look like {mix[0]} read as {read_as[0]} ({si / read_as[1]:.4g} {mix[0]}, a storey's "
+              f"height): {hint.format(unit=mix[0])}") if mix else "check the coordinates' unit"
+    every = f"the lowest of {len(heights)} zones, {zone!r}," if len(heights) > 1 else f"the one zone, {zone!r},"
+    return [Diagnostic(code=LOWEST.code, message=(
+        f"Every zone stands over {LOWEST.high / METRES[units]:.3g} {units} high ({every} is {value:.4g} {units}): "
+        f"a hall's height at most, never every room's; {likely}."),
+        details={"quantity": LOWEST.quantity, "units": units, "lowest_zone": zone, "height": value,
+                 "zones": len(heights), "plausible_maximum": LOWEST.high / METRES[units],
                  "likely_file_unit": mix[0] if mix else None})]

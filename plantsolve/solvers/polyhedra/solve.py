@@ -28,7 +28,7 @@ from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genu
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
 from plantsolve.solvers.polyhedra.file_units import METRES
-from plantsolve.solvers.polyhedra.plausibility import building_too_low, implausible
+from plantsolve.solvers.polyhedra.plausibility import building_too_low, implausible, zones_all_too_tall
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
 from plantsolve.solvers.polyhedra.subsurfaces import subsurface_warnings
@@ -368,6 +368,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     warnings.extend(implausible(zones, measured, request.units, hint, read_as(request)))
     if not any(w.code == "implausible_zone_height" for w in warnings):  # a height out of range says it already
         warnings.extend(building_too_low(measured, request.units, hint, read_as(request)))
+        warnings.extend(zones_all_too_tall(measured, request.units, hint, read_as(request)))
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")

@@ -466,6 +466,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones, rules))
     warnings.extend(_zones_not_defined([undefined[k] for k in sorted(undefined, key=lambda k: undefined[k][1] or 0)
                                         if k in used_zones]))
+    warnings.extend(_zones_without_surfaces([(zone_names[k], zone_line[k]) for k in zone_names if k not in used_zones],
+                                            len(used_zones)))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
     warnings.extend(w.model_dump() for w in zone_list_strays(objects, zone_names))
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
@@ -494,6 +496,20 @@ def _zones_not_defined(undefined: list[tuple[str, int]]) -> list[Diagnostic]:
         f"{' …' if len(undefined) > 5 else ''}. EnergyPlus refuses such surfaces; they were read as if the zone's "
         "origin and north axis were 0, which puts them elsewhere if the zone has an origin (add its Zone object)."),
         details={"zones": [name for name, _ in undefined[:100]], "lines": [line for _, line in undefined[:100]]})]
+
+
+def _zones_without_surfaces(bare: list[tuple[str, int]], measured: int) -> list[Diagnostic]:
+    """``Zone`` objects no surface read names (their surfaces lost from a cut or edited file, or skipped): they are in
+    no result, so the totals, which looked whole, are those of the other zones only."""
+    if not bare:
+        return []
+    listed = ", ".join(f"{name!r}{_where(line)}" for name, line in bare[:5])
+    return [Diagnostic(code="zones_without_surfaces", message=(
+        f"{len(bare)} Zone object(s) have no surface read from the file: {listed}{' …' if len(bare) > 5 else ''}. "
+        f"They are in no result: total_volume and total_floor_area are those of the {measured} zone(s) with "
+        "surfaces only (a file cut or edited after its zones, or their surfaces skipped: see skipped_lines)."),
+        details={"zones": [name for name, _ in bare[:100]], "lines": [line for _, line in bare[:100]],
+                 "count": len(bare), "zones_measured": measured})]
 
 
 def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names: dict[str, str],
@@ -719,6 +735,9 @@ def parse_stl(content: bytes) -> dict:
     elif not ascii_like and not binary_like and _is_text(content[84:4096]):
         # text under an .stl name (an OBJ, a CSV) read as a binary STL cut short: its characters as garbage floats
         raise reject("not an STL file: it is text, and not an ASCII STL ('solid … facet … endsolid')")
+    elif not ascii_like and not binary_like and _another_format(content):
+        # a PLY, a STEP or IFC model, a zip under an .stl name: read as a binary STL cut short, garbage floats
+        raise reject("not an STL file: its first bytes are another format's")
     elif not ascii_like and 84 < len(content) < 84 + 50 * declared:
         whole = (len(content) - 84) // 50  # a binary file cut short: its whole triangles are read
         if whole == 0:
@@ -788,6 +807,13 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _another_format(content: bytes) -> bool:
+    """Whether the file's first bytes are those of a format :func:`file_holds` knows by its signature alone (a binary
+    STL's 80-byte header is free text, so only signatures, not a guess from its lines, tell it apart)."""
+    holds = file_holds(content[:65536]) or ""
+    return holds.startswith(("a PLY", "an IFC", "a STEP", "a zip", "a gbXML", "an XML", "a JSON"))
 
 
 def _read_stl(content: bytes) -> dict:

@@ -338,11 +338,13 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     if builds:  # nor a set of several builds for one build in pieces
         message += (f"; the drawing places {len(builds)} piece(s) apart as separate builds: "
                     + ", ".join(f"{b['first']} ({b['parts']} parts)" for b in builds[:LISTED_IN_MESSAGE]))
+    source = request.source or {}
+    not_read = source.get("placements_not_read")
     coverage = coverage_verdict(len(part_ids), [u.part.lower() for u in unknown],
-                                np.array([positions[u.id] for u in unknown], dtype=float).reshape(-1, 3))
+                                np.array([positions[u.id] for u in unknown], dtype=float).reshape(-1, 3),
+                                not_read if type(not_read) is int and not_read > 0 and request.parts else 0)
     # a model of parts is one build unless its drawing says otherwise (bodies and joints: the joints are the user's)
     apart = one_piece_verdict(piece_results) if request.parts else None
-    source = request.source or {}
     missing = missing_submodels_verdict(source.get("missing_submodels") or {}, source.get("missing_submodels_count"))
     # the verdicts first, the gravest first
     warnings = [v for v in (missing, coverage, apart) if v is not None] + warnings

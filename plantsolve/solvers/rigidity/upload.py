@@ -459,6 +459,11 @@ def parse_ldraw(text: str) -> dict:
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
 
     expand(main, np.eye(3), np.zeros(3), "", (main,))
+    # what the skipped placements would have placed, counted before a line repeated by its sub-model's placements is
+    # said once: a verdict on the model needs the parts read to be most of it (a placement a sub-model's missing
+    # section or its own loop skips is not counted: submodels_missing says the one, the other places nothing)
+    not_read = sum(1 for entry in skipped if not entry["reason"].startswith(("places sub-model", "sub-model ",
+                                                                             "line type ")))
     # a line of a sub-model placed n times is skipped n times: one line of the file, said once
     first_of_line: dict[int, dict] = {}
     for entry in skipped:
@@ -526,6 +531,7 @@ def parse_ldraw(text: str) -> dict:
                                                              in list(missing.values())[:MAX_SKIPPED_LISTED]},
                                        "missing_submodels_count": len(missing),
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
+                                       "placements_not_read": not_read,
                                        "warnings": warnings}}
 
 
@@ -697,7 +703,25 @@ def parse_upload(source: StoredInput, options: dict | None) -> RigidityRequest:
     body = json_object(text) if source.extension == ".json" else parse_ldraw(text)
     if source.extension == ".json":
         _refuse_other_request(body)
-    return request_of_file(body, options, FORM)
+    request = request_of_file(body, options, FORM)
+    if source.extension != ".json" and isinstance(options, dict) and options.get("units") is not None:
+        request.source["warnings"].append(_form_units_not_used(request.units, options))
+    return request
+
+
+def _form_units_not_used(units: str, options: dict) -> dict:
+    """The form's ``units`` beside an LDraw file, which states its own: its positions, the result's lengths and
+    ``contact_tolerance`` are LDU whatever the form says (a tolerance meant in millimetres is 2.5 times as large in
+    LDU), so the unit the user meant is said not to be used."""
+    tolerance = options.get("contact_tolerance", (options.get("options") or {}).get("contact_tolerance")
+                            if isinstance(options.get("options"), dict) else None)
+    said = (f"; contact_tolerance {tolerance} is read in LDU too ({float(tolerance) * 0.4:g} mm), not in {units}"
+            if isinstance(tolerance, (int, float)) and not isinstance(tolerance, bool) else "")
+    return Diagnostic(code="units_not_used", message=(
+        f"options.units {units!r} is not used: an LDraw file states its own unit, the LDraw unit (1 LDU = 0.4 mm), in "
+        f"which its positions are read and the result's lengths are given{said}. options.units applies to the bodies "
+        "of a JSON request."), details={"units": units, "file_unit": "ldu",
+                                        "contact_tolerance_ldu": tolerance if said else None}).model_dump()
 
 
 MODEL_FIELDS = ("bodies", "joints", "parts")

@@ -1,9 +1,10 @@
 """When a LEGO model's answer is no answer: the verdicts a parts model's report can hold.
 
-- ``rigidity_not_determined`` (NOT DETERMINED): the parts not in the catalogue are at least half of the model (its
-  known parts no majority), so ``dof``, ``rigid`` and the pieces, counted over the known parts only, say nothing of
-  the model: ``rigid`` is null. A flexible element an editor draws as a chain of short segments (an LSynth hose or
-  rope, a hose of segments 754) is one element, not hundreds of parts (:func:`unknown_elements`).
+- ``rigidity_not_determined`` (NOT DETERMINED): the parts not in the catalogue, with the placements the reader could
+  not read, are at least half of the model (its known parts no majority), so ``dof``, ``rigid`` and the pieces,
+  counted over the known parts only, say nothing of the model: ``rigid`` is null. A flexible element an editor draws
+  as a chain of short segments (an LSynth hose or rope, a hose of segments 754) is one element, not hundreds of parts
+  (:func:`unknown_elements`).
 - ``one_piece_not_determined`` (NOT DETERMINED): a model is one build unless its drawing says otherwise, so known parts
   that come apart into pieces besides the held sub-builds (a minifigure, a whole sub-model standing clear) and the
   separate builds the drawing places apart (a second vehicle, spares laid aside) are a build that falls apart as
@@ -54,21 +55,28 @@ def unknown_elements(numbers: Sequence[str], positions: np.ndarray) -> int:
     return int(count)
 
 
-def coverage_verdict(known: int, unknown_numbers: Sequence[str], unknown_positions: np.ndarray) -> Diagnostic | None:
-    """``rigidity_not_determined`` when the known parts are no majority of the model's elements."""
-    if not len(unknown_numbers):
+def coverage_verdict(known: int, unknown_numbers: Sequence[str], unknown_positions: np.ndarray,
+                     not_read: int = 0) -> Diagnostic | None:
+    """``rigidity_not_determined`` when the known parts are no majority of the model's elements: those the catalogue
+    lacks, and the placements the reader skipped (``not_read``: a matrix that scales, a position not finite, a line
+    cut), each one element at least."""
+    if not len(unknown_numbers) and not not_read:
         return None
     elements = unknown_elements(unknown_numbers, unknown_positions)
-    share = elements / (known + elements)
+    share = (elements + not_read) / (known + elements + not_read)
     if share < 1.0 - KNOWN_MAJORITY:
         return None
+    counted = [(f"{len(unknown_numbers)} part(s) not in the catalogue, {elements} element(s) counting a chain of "
+                "segments as one")] if len(unknown_numbers) else []
+    counted += [f"{not_read} placement(s) whose lines could not be read (skipped_lines)"] if not_read else []
     return Diagnostic(
-        code="rigidity_not_determined", message=f"rigidity not determined: the parts not in the catalogue are "
-        f"{share:.0%} of the model ({len(unknown_numbers)} part(s), {elements} element(s) counting a chain of "
-        f"segments as one; {known} known part(s)), so dof, rigid and the pieces, counted over the known parts only, "
-        f"cover no majority of it (rigid is null; a verdict needs the known parts above {KNOWN_MAJORITY:.0%})",
+        code="rigidity_not_determined", message=f"rigidity not determined: the parts "
+        f"{'not in the catalogue or not read' if not_read else 'not in the catalogue'} are {share:.0%} of the model "
+        f"({'; '.join(counted)}; {known} known part(s)), so dof, rigid and the pieces, counted over the known parts "
+        f"only, cover no majority of it (rigid is null; a verdict needs the known parts above {KNOWN_MAJORITY:.0%})",
         details={"unknown_share": round(share, 4), "unknown_parts": len(unknown_numbers),
-                 "unknown_elements": elements, "known_parts": known, "known_share_needed": KNOWN_MAJORITY})
+                 "unknown_elements": elements, "placements_not_read": not_read, "known_parts": known,
+                 "known_share_needed": KNOWN_MAJORITY})
 
 
 def one_piece_verdict(found: Sequence[Piece]) -> Diagnostic | None:

@@ -1,0 +1,59 @@
+"""Placements the LDraw reader skips (a matrix that scales, a position not finite, a line cut) are parts the analysis
+never saw: when they and the unknown parts are half of the model or more, rigidity is NOT DETERMINED, as for unknown
+parts. Before, two bricks of which one was placed by a scaling matrix were 'rigid: true, dof 0' (one brick alone)."""
+
+from __future__ import annotations
+
+import pytest
+
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.rigidity.solve import solve
+from plantsolve.solvers.rigidity.upload import parse_upload
+
+IDENTITY = "1 0 0 0 1 0 0 0 1"
+
+
+def brick(y: float, matrix: str = IDENTITY, x: str = "0") -> str:
+    return f"1 16 {x} {y:g} 0 {matrix} 3001.dat\n"
+
+
+def solved(text: str, name: str = "model.ldr"):
+    request = parse_upload(StoredInput.from_bytes(name, text.encode()), None)
+    return request, solve(request).result
+
+
+def codes(result) -> list[str]:
+    return [w.code for w in result.report.warnings]
+
+
+@pytest.mark.parametrize("second", [brick(-24, "2 0 0 0 2 0 0 0 2"), brick(-24, x="nan"), brick(-24, x="1e300"),
+                                    brick(-24, "0 0 0 0 0 0 0 0 0")])
+def test_one_of_two_bricks_not_read_leaves_rigidity_not_determined(second):
+    request, result = solved(brick(0) + second)
+    assert request.source["placements_not_read"] == 1
+    assert result.rigid is None and codes(result)[0] == "rigidity_not_determined"
+    (verdict,) = [w for w in result.report.warnings if w.code == "rigidity_not_determined"]
+    assert verdict.details["placements_not_read"] == 1 and verdict.details["known_parts"] == 1
+    assert "skipped_lines" in codes(result)
+
+
+def test_one_unread_brick_of_a_stack_of_nine_keeps_the_verdict():
+    text = "".join(brick(-24 * k) for k in range(8)) + brick(-24 * 8, x="nan")
+    request, result = solved(text)
+    assert request.source["placements_not_read"] == 1
+    assert result.rigid is True and result.dof == 0 and "rigidity_not_determined" not in codes(result)
+
+
+def test_a_line_of_a_sub_model_placed_three_times_counts_each_placement():
+    text = ("0 FILE main.ldr\n" + "".join(f"1 16 0 {-24 * k} 0 {IDENTITY} pair.ldr\n" for k in range(3))
+            + "0 FILE pair.ldr\n" + brick(0) + brick(-24, "2 0 0 0 2 0 0 0 2"))
+    request, result = solved(text, "model.mpd")
+    assert request.source["placements_not_read"] == 3 and len(request.parts) == 3
+    assert result.rigid is None and codes(result)[0] == "rigidity_not_determined"
+
+
+def test_a_missing_sub_model_is_said_by_its_own_verdict_not_counted_as_unread():
+    request, result = solved("0 FILE main.ldr\n" + brick(0) + brick(-24) + f"1 16 0 24 0 {IDENTITY} lost.ldr\n",
+                             "model.mpd")
+    assert request.source["placements_not_read"] == 0
+    assert codes(result)[0] == "submodels_missing" and "rigidity_not_determined" not in codes(result)
