@@ -404,7 +404,24 @@ def _records_against_points(item: Item, doc: Document, turn: float, arms: list[f
         out.append({"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"),
                     "value": item.records["BEND-RADIUS"].split()[0], "read_as": radius,
                     "from_points": round(from_points, 6), "unit": doc.units or "mm"})
+    found = _radius_from_points(turn, arms)
+    if found is not None:
+        out.extend(_unusable_radius(item, doc, found[0]))
     return out
+
+
+def _unusable_radius(item: Item, doc: Document, from_points: float) -> list[dict]:
+    """The BEND-RADIUS record of a bend when it is written but is no positive number (0, -152.4, nan): it was passed
+    over without a word, as if the file had none."""
+    raw = item.records.get("BEND-RADIUS")
+    if raw is None or _bend_radius(item) is not None:
+        return []
+    try:
+        float(raw.split()[0])
+    except (ValueError, IndexError):  # a word (LR, 1.5D) is no number to weigh against the points
+        return []
+    return [{"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"), "value": raw.split()[0],
+             "read_as": None, "from_points": round(from_points, 6), "unit": doc.units or "mm"}]
 
 
 @dataclass
@@ -480,6 +497,7 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
                 contradicted = [{"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"),
                                  "value": item.records["BEND-RADIUS"].split()[0], "read_as": bend_radius,
                                  "from_points": round(span / 2.0, 6), "unit": doc.units or "mm"}]
+            contradicted.extend(_unusable_radius(item, doc, span / 2.0))
             if on_line and angle is not None and abs(angle - 180.0) > RECORD_ANGLE_DEG:
                 # its CENTRE-POINT midway between its END-POINTs makes it a return bend, whatever its ANGLE says (an
                 # ANGLE 90 bend so written was aligned as a 180 degree one without a word)

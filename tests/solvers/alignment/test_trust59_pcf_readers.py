@@ -95,3 +95,29 @@ def test_a_short_pipe_whose_far_end_meets_nothing_is_still_named():
                            "    END-POINT -228.6000")
     (found,) = _warnings(moved)["pcf_zero_length_pipe"]["items"]
     assert found["id"] == "PIPE-2" and found["length"] == pytest.approx(0.4)
+
+
+ELBOW = ("UNITS-BORE MM\nUNITS-CO-ORDS MM\n"
+         "PIPE\n    END-POINT 0.0 0.0 0.0 100.0\n    END-POINT 1000.0 0.0 0.0 100.0\n"
+         "ELBOW\n    END-POINT 1000.0 0.0 0.0 100.0\n    END-POINT 1152.4 152.4 0.0 100.0\n"
+         "    CENTRE-POINT 1152.4 0.0 0.0\n    BEND-RADIUS {radius}\n"
+         "PIPE\n    END-POINT 1152.4 152.4 0.0 100.0\n    END-POINT 1152.4 1152.4 0.0 100.0\n")
+
+
+@pytest.mark.parametrize("radius", ["0", "-152.4", "nan"])
+def test_a_bend_radius_record_that_is_no_positive_number_is_named(radius):
+    # before: passed over as if the file had none, without a word
+    (found,) = _warnings(ELBOW.format(radius=radius))["pcf_records_contradict_points"]["records"]
+    assert (found["record"], found["record_line"], found["value"], found["read_as"]) == ("BEND-RADIUS", 10, radius, None)
+    assert found["from_points"] == pytest.approx(152.4)
+
+
+@pytest.mark.parametrize("radius", ["152.4", "LR"])
+def test_a_bend_radius_the_points_agree_with_or_a_word_is_not_named(radius):
+    assert "pcf_records_contradict_points" not in _warnings(ELBOW.format(radius=radius))
+
+
+def test_a_return_bends_radius_record_of_zero_is_named():
+    (found,) = _warnings(RETURN.format(angle="180").replace("BEND-RADIUS 500.0", "BEND-RADIUS 0"))[
+        "pcf_records_contradict_points"]["records"]
+    assert (found["record"], found["value"], found["from_points"]) == ("BEND-RADIUS", "0", 500.0)
