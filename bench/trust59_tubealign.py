@@ -7,6 +7,7 @@ a word or two.
   between a flange and a bend, a BEND-RADIUS written as 0, a negative number or nan;
 - a tube's coarse mesh (a CAD-style tessellation, read as samples on its faces) written with its faces shuffled, its
   corners rolled or its vertices renumbered: the same LRA?
+- a PLY scan whose header declares an (empty) face element before the vertex element, or names the coordinates X Y Z.
 
     git -C /work/main worktree add --detach /work/wt/trust59a-ref main
     python bench/trust59_tubealign.py --ref /work/wt/trust59a-ref
@@ -123,11 +124,41 @@ def _mesh_cases():
         yield f"tube: coarse STL mesh, {what}", "same LRA" if gap == 0 else f"LRA differs by up to {gap:.3g}"
 
 
+def _ply_cases():
+    import struct
+
+    import numpy as np
+
+    from plantsolve.solvers.base import InputRejected, StoredInput
+    from plantsolve.solvers.tube.upload import parse_upload
+
+    points = np.loadtxt(ROOT / "examples" / "tube" / "scan.xyz")
+
+    def said(header: str, body: bytes) -> str:
+        try:
+            read = np.asarray(parse_upload(StoredInput.from_bytes("scan.ply", header.encode() + body), None).points)
+        except InputRejected as refused:
+            return "422 " + refused.errors[0].msg[:50]
+        return "the scan's points" if np.allclose(read, points, atol=1e-3) else f"{len(read)} other points"
+
+    vertex = f"element vertex {len(points)}\nproperty float x\nproperty float y\nproperty float z\n"
+    face = "element face 0\nproperty list uchar int vertex_indices\n"
+    text = "".join(f"{x:.3f} {y:.3f} {z:.3f}\n" for x, y, z in points).encode()
+    binary = b"".join(struct.pack("<3f", *p) for p in points)
+    yield "PLY ascii: empty face element before the vertices", said(
+        "ply\nformat ascii 1.0\n" + face + vertex + "end_header\n", text)
+    yield "PLY binary: empty face element before the vertices", said(
+        "ply\nformat binary_little_endian 1.0\n" + face + vertex + "end_header\n", binary)
+    yield "PLY ascii: coordinates named X Y Z", said(
+        "ply\nformat ascii 1.0\n" + vertex.replace(" x\n", " X\n").replace(" y\n", " Y\n").replace(" z\n", " Z\n")
+        + "end_header\n", text)
+
+
 def child() -> None:
     import logging
 
     logging.disable(logging.WARNING)
-    for group in (_pcf_cases, _mesh_cases):
+    for group in (_pcf_cases, _mesh_cases, _ply_cases):
         for case, said in group():
             print(json.dumps({"case": case, "said": said}), flush=True)
 
