@@ -7,7 +7,8 @@ a word or two.
   between a flange and a bend, a BEND-RADIUS written as 0, a negative number or nan;
 - a tube's coarse mesh (a CAD-style tessellation, read as samples on its faces) written with its faces shuffled, its
   corners rolled or its vertices renumbered: the same LRA?
-- a PLY scan whose header declares an (empty) face element before the vertex element, or names the coordinates X Y Z.
+- a PLY scan whose header declares an (empty) face element before the vertex element, or names the coordinates X Y Z;
+- tube bend radius options that contradict each other (one of them silently won).
 
     git -C /work/main worktree add --detach /work/wt/trust59a-ref main
     python bench/trust59_tubealign.py --ref /work/wt/trust59a-ref
@@ -154,11 +155,26 @@ def _ply_cases():
         + "end_header\n", text)
 
 
+def _option_cases():
+    from plantsolve.solvers.base import InputRejected, StoredInput
+    from plantsolve.solvers.tube.upload import parse_upload
+
+    xyz = (ROOT / "examples" / "tube" / "scan.xyz").read_bytes()
+    for options in ({"bend_radius": 18, "dies": [18, 30]}, {"common_bend_radius": True, "bend_radius_model": "per_bend"},
+                    {"dies": [18, 30], "bend_radius_model": "common"}, {"bend_radius": 18, "bend_radius_model": "common"}):
+        try:
+            parse_upload(StoredInput.from_bytes("scan.xyz", xyz), options)
+            said = "accepted"
+        except InputRejected as refused:
+            said = "422 " + ".".join(map(str, refused.errors[0].loc))
+        yield f"tube options {json.dumps(options)}", said
+
+
 def child() -> None:
     import logging
 
     logging.disable(logging.WARNING)
-    for group in (_pcf_cases, _mesh_cases, _ply_cases):
+    for group in (_pcf_cases, _mesh_cases, _ply_cases, _option_cases):
         for case, said in group():
             print(json.dumps({"case": case, "said": said}), flush=True)
 
