@@ -8,7 +8,8 @@ a word or two.
 - a tube's coarse mesh (a CAD-style tessellation, read as samples on its faces) written with its faces shuffled, its
   corners rolled or its vertices renumbered: the same LRA?
 - a PLY scan whose header declares an (empty) face element before the vertex element, or names the coordinates X Y Z;
-- tube bend radius options that contradict each other (one of them silently won).
+- tube bend radius options that contradict each other (one of them silently won);
+- a header-less scan writing an intensity before x, y, z.
 
     git -C /work/main worktree add --detach /work/wt/trust59a-ref main
     python bench/trust59_tubealign.py --ref /work/wt/trust59a-ref
@@ -170,11 +171,30 @@ def _option_cases():
         yield f"tube options {json.dumps(options)}", said
 
 
+def _column_cases():
+    import numpy as np
+
+    from plantsolve.solvers.base import StoredInput
+    from plantsolve.solvers.tube.solve import solve
+    from plantsolve.solvers.tube.upload import parse_upload
+
+    points = np.loadtxt(ROOT / "examples" / "tube" / "scan.xyz")
+    intensity = np.random.default_rng(59).integers(0, 4096, len(points))
+    for what, text in (("intensity x y z", "".join(f"{i} {x:.3f} {y:.3f} {z:.3f}\n"
+                                                   for i, (x, y, z) in zip(intensity, points))),
+                       ("x y z intensity (guard)", "".join(f"{x:.3f} {y:.3f} {z:.3f} {i}\n"
+                                                           for i, (x, y, z) in zip(intensity, points)))):
+        result = solve(parse_upload(StoredInput.from_bytes("scan.xyz", text.encode()), None)).result
+        codes = [w.code for w in result.report.warnings]
+        yield f"tube: header-less {what}", (f"{len(result.lra) - 1} bends, r {result.pipe_radius:.3g}, status "
+                                           f"{result.report.status}" + (f" ({', '.join(codes)})" if codes else ""))
+
+
 def child() -> None:
     import logging
 
     logging.disable(logging.WARNING)
-    for group in (_pcf_cases, _mesh_cases, _ply_cases, _option_cases):
+    for group in (_pcf_cases, _mesh_cases, _ply_cases, _option_cases, _column_cases):
         for case, said in group():
             print(json.dumps({"case": case, "said": said}), flush=True)
 
