@@ -234,6 +234,29 @@ class TubeOptions(StrictModel):
             raise ValueError(f"give the nominal once: {', '.join(given)} are all set")
         return self
 
+    @model_validator(mode="after")
+    def _one_radius_rule(self):
+        """The bend radius options say one thing: ``bend_radius`` held every bend at it whatever ``dies`` or
+        ``bend_radius_model`` said, ``common_bend_radius`` overrode ``bend_radius_model``, ``dies`` overrode both,
+        each without a word (a bend made on a 30 mm die among ``dies: [18, 30]`` was fitted at ``bend_radius: 18``)."""
+        said = {"one radius for every bend": [], "each bend the nearest die": [], "a free radius per bend": []}
+        if self.bend_radius is not None:
+            said["one radius for every bend"].append(f"bend_radius {self.bend_radius:g}")
+        if self.common_bend_radius:
+            said["one radius for every bend"].append("common_bend_radius")
+        if self.dies:
+            said["each bend the nearest die"].append("dies")
+        rule = {"common": "one radius for every bend", "dies": "each bend the nearest die",
+                "per_bend": "a free radius per bend"}.get(self.bend_radius_model)
+        if rule is not None:
+            said[rule].append(f"bend_radius_model {self.bend_radius_model!r}")
+        rules = [(rule, options) for rule, options in said.items() if options]
+        if len(rules) > 1:
+            raise ValueError("the bend radius options contradict each other: " + "; ".join(
+                f"{' and '.join(options)} {'give' if len(options) > 1 else 'gives'} {rule}" for rule, options in rules)
+                + ". Leave out all but one of these rules")
+        return self
+
 
 def _points_form(value: Any) -> str:
     """Which of the two forms ``points`` is (so that errors name only that form's fields)."""

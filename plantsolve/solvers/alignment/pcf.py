@@ -91,6 +91,7 @@ UNITS = {"MM": "mm", "MILLIMETRE": "mm", "MILLIMETRES": "mm", "MILLIMETER": "mm"
          "INCH": "in", "INCHES": "in", "IN": "in", "INCH-FRACTION": "in", "M": "m", "METRE": "m", "METRES": "m",
          "CM": "cm", "FT": "ft", "FEET": "ft"}
 TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+UNIT_RECORDS = ("UNITS-CO-ORDS", "UNITS-BORE")
 # Exporting tools recognised by name anywhere in the file, and E3D's database references (=1234/567).
 TOOLS = (
     ("aveva_e3d", re.compile(r"\bAVEVA\b|\bE3D\b|\bPDMS\b|\bEverything3D\b", re.I)),
@@ -160,6 +161,8 @@ class Document:
     id_source: dict[str, int]
     tool: str | None
     decimals: int
+    # 0-based lines of the UNITS-CO-ORDS / UNITS-BORE records read as the file's (the header's, indented or not)
+    unit_lines: tuple[int, ...] = ()
 
     @property
     def units(self) -> str | None:
@@ -188,17 +191,26 @@ def read_document(text: str) -> Document:
     current: Item | None = None
     in_materials = False
     decimals = 0
+    unit_lines: list[int] = []
     for i, line in enumerate(lines):
         parts = line.split()
         if not parts:
             continue
         word = parts[0].upper()
+        if line[0].isspace() and current is None and word in UNIT_RECORDS:
+            # a UNITS record indented under the header's PIPELINE-REFERENCE (some writers indent the whole header):
+            # still the file's unit; passed over, inch bores were read in millimetres and the file said to state none
+            header.setdefault(word, parts[1].upper() if len(parts) > 1 else "")
+            unit_lines.append(i)
+            continue
         if not line[0].isspace():
             words.add(word)
             current = None
             if word.startswith(("UNITS-", "ATTRIBUTE", "PIPELINE-ATTRIBUTE")) or word in HEADER_RECORDS:
                 header.setdefault(word, parts[1].upper() if len(parts) > 1 else "")
                 in_materials = in_materials or word == "MATERIALS"
+                if word in UNIT_RECORDS:
+                    unit_lines.append(i)
                 continue
             if word in MATERIAL_RECORDS and (in_materials or word != "ITEM-CODE" or not items):
                 continue
@@ -221,7 +233,7 @@ def read_document(text: str) -> Document:
     if tool is None and E3D_REFERENCE.search(text):
         tool = "aveva_e3d"
     return Document(lines=lines, endings=endings, header=header, items=items, unknown=unknown,
-                    id_source=id_source, tool=tool, decimals=min(decimals, 12))
+                    id_source=id_source, tool=tool, decimals=min(decimals, 12), unit_lines=tuple(unit_lines))
 
 
 def _assign_ids(items: list[Item]) -> dict[str, int]:
@@ -392,7 +404,24 @@ def _records_against_points(item: Item, doc: Document, turn: float, arms: list[f
         out.append({"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"),
                     "value": item.records["BEND-RADIUS"].split()[0], "read_as": radius,
                     "from_points": round(from_points, 6), "unit": doc.units or "mm"})
+    found = _radius_from_points(turn, arms)
+    if found is not None:
+        out.extend(_unusable_radius(item, doc, found[0]))
     return out
+
+
+def _unusable_radius(item: Item, doc: Document, from_points: float) -> list[dict]:
+    """The BEND-RADIUS record of a bend when it is written but is no positive number (0, -152.4, nan): it was passed
+    over without a word, as if the file had none."""
+    raw = item.records.get("BEND-RADIUS")
+    if raw is None or _bend_radius(item) is not None:
+        return []
+    try:
+        float(raw.split()[0])
+    except (ValueError, IndexError):  # a word (LR, 1.5D) is no number to weigh against the points
+        return []
+    return [{"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"), "value": raw.split()[0],
+             "read_as": None, "from_points": round(from_points, 6), "unit": doc.units or "mm"}]
 
 
 @dataclass
@@ -468,6 +497,13 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
                 contradicted = [{"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"),
                                  "value": item.records["BEND-RADIUS"].split()[0], "read_as": bend_radius,
                                  "from_points": round(span / 2.0, 6), "unit": doc.units or "mm"}]
+            contradicted.extend(_unusable_radius(item, doc, span / 2.0))
+            if on_line and angle is not None and abs(angle - 180.0) > RECORD_ANGLE_DEG:
+                # its CENTRE-POINT midway between its END-POINTs makes it a return bend, whatever its ANGLE says (an
+                # ANGLE 90 bend so written was aligned as a 180 degree one without a word)
+                contradicted.append({"record": "ANGLE", "record_line": _record_line(item, doc, "ANGLE"),
+                                     "value": item.records["ANGLE"].split()[0], "read_as": angle,
+                                     "from_points": 180.0, "unit": "deg"})
             if not on_line:
                 d = _unit(-off)
                 return Geometry([(e0, d), (e1, d.copy())], [ends[0][0], ends[1][0]], "fitting", ftype, radius,
@@ -696,15 +732,15 @@ def _refuse_unknown_units(doc: Document) -> None:
     """A 422 naming the line of a UNITS-CO-ORDS or UNITS-BORE record whose unit is none read here. An unknown
     UNITS-BORE was taken for the coordinates' unit without a word, so bores in another unit reached 25.4 or 1000
     times too far or too short when end points were joined."""
-    for record in ("UNITS-CO-ORDS", "UNITS-BORE"):
-        for i, line in enumerate(doc.lines):
-            words = line.split()
+    for record in UNIT_RECORDS:
+        for i in doc.unit_lines:
+            words = doc.lines[i].split()
             # a bare UNITS-CO-ORDS states a unit without naming it: no default can be taken for it (it crashed the
             # joining of end points, a generic 422 or a crashed job)
-            if line[:1].strip() and len(words) == 1 and words[0].upper() == record == "UNITS-CO-ORDS":
+            if len(words) == 1 and words[0].upper() == record == "UNITS-CO-ORDS":
                 raise reject(f"line {i + 1}: {record} names no unit; write the unit the file's coordinates are in "
                              "(MM, CM, M, INCH, FT)")
-            if line[:1].strip() and len(words) > 1 and words[0].upper() == record and words[1].upper() not in UNITS:
+            if len(words) > 1 and words[0].upper() == record and words[1].upper() not in UNITS:
                 raise reject(f"line {i + 1}: {record} {words[1]!r} is no unit read here (MM, CM, M, INCH, FT and "
                              "their spellings); write the unit the file's numbers are in")
 
@@ -712,9 +748,9 @@ def _refuse_unknown_units(doc: Document) -> None:
 def _refuse_contradicting_units(doc: Document) -> None:
     """A 422 for a file whose UNITS-CO-ORDS (or UNITS-BORE) records name different units (two files pasted into
     one): the first was taken for every coordinate, those under the other are then read in the wrong unit."""
-    for record in ("UNITS-CO-ORDS", "UNITS-BORE"):
-        found = [(i + 1, line.split()[1].upper()) for i, line in enumerate(doc.lines)
-                 if line[:1].strip() and len(line.split()) > 1 and line.split()[0].upper() == record]
+    for record in UNIT_RECORDS:
+        found = [(i + 1, doc.lines[i].split()[1].upper()) for i in doc.unit_lines
+                 if len(doc.lines[i].split()) > 1 and doc.lines[i].split()[0].upper() == record]
         if len({UNITS.get(value, value) for _, value in found}) > 1:
             raise reject(f"{record} names different units: " + ", ".join(f"line {n}: {v}" for n, v in found[:5])
                          + "; a file holds one unit for all its coordinates (two files pasted into one?)")
@@ -1258,13 +1294,46 @@ def _open_ends_inside_pipes(comps: list[dict], net: dict, doc: Document) -> list
 SHORT_PIPE_BORES = 0.1
 
 
+def _end_points_met(doc: Document) -> tuple[cKDTree | None, np.ndarray, float]:
+    """Every readable END-POINT / BRANCHn-POINT of the file (a tree over them, the item of each) and the distance
+    within which two of them are one point as printed."""
+    where, owner = [], []
+    for k, it in enumerate(doc.items):
+        for i in it.point_lines:
+            if doc.lines[i].split()[0].upper() == "CENTRE-POINT":
+                continue
+            try:
+                where.append(read_point(doc.lines[i])[0])
+            except ItemProblem:
+                continue
+            owner.append(k)
+    if not where:
+        return None, np.zeros(0, dtype=int), 0.0
+    P = np.array(where)
+    eps = max(1e-6, 2.0 * doc.quantum) + 1e-12 * float(np.max(np.abs(P)))
+    return cKDTree(P), np.array(owner), eps
+
+
+def _fills_a_gap(k: int, ends: list[np.ndarray], met: tuple[cKDTree | None, np.ndarray, float]) -> bool:
+    """Item ``k``'s two END-POINTs each meet, as printed, an end point of another item, and not both the same one:
+    a short pipe written to fill the gap between two items (exporters write pipes of 0.4 mm between a flange and a
+    bend), whose both neighbours are joined; an END-POINT typed twice leaves the item at the real far end alone."""
+    tree, owner, eps = met
+    if tree is None:
+        return False
+    near = [{int(owner[j]) for j in tree.query_ball_point(e, eps)} - {k} for e in ends]
+    return any(a != b for a in near[0] for b in near[1])
+
+
 def _zero_length_pipe_notes(doc: Document, geometry: dict) -> list[tuple[str, str, dict, str]]:
     """A warning naming each PIPE whose two END-POINTs are one point (to the printed digits), or lie closer than
     :data:`SHORT_PIPE_BORES` of its bore: a weld or a gasket may have no length, a pipe has one, so an end point was
     typed twice, or next to the other. Read as a joint, the pipe joins nothing at
-    its real far end and the item there is left open, warned about under its own name only."""
+    its real far end and the item there is left open, warned about under its own name only. A short pipe whose ends
+    meet two other items (:func:`_fills_a_gap`) is none of that: nothing is left open."""
     found = []
-    for it in doc.items:
+    met = None
+    for k, it in enumerate(doc.items):
         g = geometry.get(it.id)
         if g is None or g.kind not in ("joint", "pipe") or not (it.keyword == "PIPE" or it.keyword.startswith("PIPE-")):
             continue
@@ -1272,6 +1341,9 @@ def _zero_length_pipe_notes(doc: Document, geometry: dict) -> list[tuple[str, st
         if len(ends) != 2:
             continue
         if g.kind == "pipe" and not (g.radius and np.linalg.norm(ends[1] - ends[0]) < SHORT_PIPE_BORES * 2.0 * g.radius):
+            continue
+        met = met or _end_points_met(doc)
+        if _fills_a_gap(k, ends, met):
             continue
         found.append({"id": it.id, "line": it.line + 1, "end_point_lines": [i + 1 for i in it.point_lines],
                       "length": float(np.linalg.norm(ends[1] - ends[0])), "unit": doc.units or "mm"})
@@ -1361,7 +1433,7 @@ def _bore_size_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
     if found is None:
         return []
     likely, other = found
-    stated_on = next((i + 1 for i, line in enumerate(doc.lines) if line.split()[:1] == [record]), None)
+    stated_on = next((i + 1 for i in doc.unit_lines if doc.lines[i].split()[0].upper() == record), None)
     where = f"line {stated_on}: {record} {doc.header.get(record)}" if stated_on else f"{record} (not written: MM)"
     listed = ", ".join(f"line {line} ({b:g})" for line, b in other[:5]) + (", ..." if len(other) > 5 else "")
     system = ("DN sizes in millimetres and no NPS (inch) size" if likely == "mm" else

@@ -53,7 +53,7 @@ def _refuse_units_option(text: str, options: dict | None) -> None:
     if not isinstance(options, dict) or "units" not in options:
         return
     stated = [f"{' '.join(line.split()[:2])} (line {i + 1})" for i, line in enumerate(text.splitlines())
-              if line[:1].strip() and line.split()[0].upper() in _UNIT_RECORDS][:4]
+              if line.split()[:1] and line.split()[0].upper() in _UNIT_RECORDS][:4]
     errors = [FieldError(("options", "units"), (
         "a PCF states its own units: its UNITS-CO-ORDS record gives the coordinates' unit (millimetres without one) "
         "and UNITS-BORE the bores' (the coordinates' without one); an option does not override them: "

@@ -116,6 +116,11 @@ def _header(content: bytes) -> tuple[str, list[Element], int, int]:
             raise reject(f"PLY header line {lineno} not understood: {line[:60]!r}") from None
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise reject(f"PLY format {fmt!r} not understood")
+    for el in elements:  # 'X Y Z' as some exporters capitalise them: the coordinates all the same
+        names = {p.name for p in el.props}
+        if not {"x", "y", "z"} & names and {"X", "Y", "Z"} <= names:
+            for p in el.props:
+                p.name = p.name.lower() if p.name in ("X", "Y", "Z") else p.name
     return fmt, elements, body, len(lines)
 
 
@@ -147,13 +152,23 @@ def read_ply(content: bytes, log: ReadLog, faces_below: int) -> PlyData:
     return PlyData(verts, triangles)
 
 
+def _faces_wanted(elements: list[Element], out: dict, faces_below: int) -> bool:
+    """Whether a mesh's faces are read: a sparse mesh's are sampled, a dense one's vertices are the samples (the
+    vertices read so far decide, or the count the header declares when the faces come first)."""
+    read = out.get("vertex")
+    return (len(read) if read is not None else next(e.count for e in elements if e.name == "vertex")) < faces_below
+
+
 def _read_ascii(content, start, header_lines, elements, _order, log, faces_below) -> dict:
     lines = content[start:].decode("utf-8", errors="replace").splitlines()
     pos, out = 0, {}
     ends_mid_line = bool(lines) and not content.endswith((b"\n", b"\r"))
     for el in elements:
-        if el.name == "face" and not ("vertex" in out and len(out["vertex"]) < faces_below):
-            break  # a dense mesh: its vertices are the samples
+        if el.name == "face" and not _faces_wanted(elements, out, faces_below):
+            if "vertex" in out:
+                break  # a dense mesh: its vertices are the samples
+            pos += el.count  # faces written before the vertices (a valid order): passed over, one a line
+            continue
         if el.name not in ("vertex", "face"):
             pos += el.count  # one record a line
             continue
@@ -256,8 +271,7 @@ def _read_binary(content, start, _header_lines, elements, order, log, faces_belo
     _refuse_doubles_declared_float(content, start, elements, order)
     pos, out = start, {}
     for el in elements:
-        want_faces = el.name == "face" and "vertex" in out and len(out["vertex"]) < faces_below
-        if el.name == "face" and not want_faces:
+        if el.name == "face" and "vertex" in out and not _faces_wanted(elements, out, faces_below):
             break
         if all(p.count_type is None for p in el.props):
             dt = np.dtype([(p.name, order + p.type) for p in el.props])
@@ -269,8 +283,8 @@ def _read_binary(content, start, _header_lines, elements, order, log, faces_belo
                     out["vertex"] = np.column_stack([rows[c] for c in "xyz"]).astype(np.float64)
                 _refuse_mistyped(out["vertex"], rows, order)
         else:
-            rows, pos, n = _binary_lists(content, pos, el, order)
-            if el.name == "face":
+            rows, pos, n = _binary_lists(content, pos, el, order)  # faces before the vertices: passed over
+            if el.name == "face" and _faces_wanted(elements, out, faces_below):
                 out["face"] = rows
         if n < el.count:
             log.truncate(f"the file ends after {n} of {el.count} {el.name} records", element=el.name, read=n,

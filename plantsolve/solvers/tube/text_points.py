@@ -265,6 +265,34 @@ def _counts_rows(lines: list[str]) -> bool:
     return first[0] in (0.0, 1.0) and bool(np.all(np.diff(first) == 1.0)) and bool(np.ptp(fourth) > 0)
 
 
+_WHOLE = re.compile(r"^[-+]?\d+$")
+_DECIMAL = re.compile(r"^[-+]?(?:\d+\.\d*|\.\d+)(?:[eE][-+]?\d+)?$")
+
+
+def _whole_then_decimals(lines: list[str]) -> bool:
+    """Whether the first column of the rows of numbers is written as whole numbers (no decimal mark) and the next
+    three with decimals, in every row looked at: an attribute written before x, y, z by a file without a header (an
+    intensity, a class, a point number that does not count the rows). A writer prints a scan's three coordinates
+    alike; read as x, the attribute made the tube of an intensity, x and y (a straight of 4,095 mm with status
+    ok). Not where the first column runs up (x sampled a unit apart, a profile scanner's steps) or the fourth is
+    constant (an attribute after x, y, z: no point of a tube's surface shares a coordinate with its neighbours)."""
+    rows = []
+    for line in lines:
+        s = line.strip()
+        if not s or not starts_number(s):
+            continue
+        rows.append([f for f in _SPLIT.split(s) if f])
+        if len(rows) == ROWS_LOOKED_AT:
+            break
+    if len(rows) < 10 or any(len(r) < 4 for r in rows):
+        return False
+    if not all(_WHOLE.match(r[0]) and all(_DECIMAL.match(c) for c in r[1:4]) for r in rows):
+        return False
+    first = np.array([float(r[0]) for r in rows])
+    fourth = np.array([float(r[3]) for r in rows])
+    return bool(np.any(np.diff(first) < 0)) and bool(np.ptp(fourth) > 0)
+
+
 def _number_rows(lines: list[str]) -> list[str]:
     """The first rows that start like numbers and write a decimal mark or a separator (rows of integers say
     neither), else the first rows that start like numbers."""
@@ -349,6 +377,13 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
             f"the rows of {width} numbers have no header and their first column counts them (0 or 1, 2, 3, ...): "
             "it was read as row numbers, x, y, z from the next three columns. Add a header (e.g. 'n x y z') if "
             "the columns are otherwise."), details={"columns": width, "x_y_z_columns": [2, 3, 4]}))
+    elif cols.names is None and width >= 4 and _whole_then_decimals(lines):
+        cols = replace(cols, index=(1, 2, 3))
+        log.warn(Diagnostic(code="first_column_skipped", message=(
+            f"the rows of {width} numbers have no header; their first column is written as whole numbers and the "
+            "next three with decimals, as a scanner writes an intensity, a class or a point number before x, y, z: "
+            "it was left out, x, y, z read from the next three columns. Add a header (e.g. 'i x y z') if the "
+            "columns are otherwise."), details={"columns": width, "x_y_z_columns": [2, 3, 4]}))
     need = max(cols.index) + 1
     ends_mid_line = bool(text) and not text.endswith(("\n", "\r"))
     rows: list[tuple[int, list[float], int]] = []  # line number, x y z, number of columns

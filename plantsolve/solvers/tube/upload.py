@@ -44,6 +44,19 @@ def points_field(pts: np.ndarray):
     return {"npy_base64": base64.b64encode(buf.getvalue()).decode("ascii")}
 
 
+def _canonical_triangles(corners: np.ndarray) -> np.ndarray:
+    """Triangles (m, 3, 3) in one order whatever order the file wrote them in: each one's corners by their
+    coordinates, the triangles by theirs. The seeded samples on the faces follow the faces' order and each face's
+    first corner, so the same mesh exported with its faces or corners in another order was read to other samples
+    and fitted to another answer."""
+    flat = corners.reshape(-1, 3)
+    rank = np.empty(len(flat), dtype=np.int64)
+    rank[np.lexsort(flat.T[::-1])] = np.arange(len(flat))
+    within = np.argsort(rank.reshape(-1, 3), axis=1)
+    corners = np.take_along_axis(corners, within[:, :, None], axis=1)
+    return corners[np.lexsort(corners.reshape(len(corners), 9).T[::-1])]
+
+
 def _mesh_points(vertices: np.ndarray, triangles: np.ndarray | None, file_type: str, log: ReadLog) -> np.ndarray:
     """A mesh's samples: its vertices, or, for a sparse CAD-style tessellation, samples on its faces (seeded, so
     the same file gives the same points). Vertices left out by the reader are NaN rows here and are dropped."""
@@ -51,7 +64,8 @@ def _mesh_points(vertices: np.ndarray, triangles: np.ndarray | None, file_type: 
 
     finite = np.isfinite(vertices).all(1)
     if triangles is not None and len(triangles) and finite.sum() < MESH_MIN_VERTICES:
-        mesh = trimesh.Trimesh(vertices, triangles, process=False)
+        corners = _canonical_triangles(vertices[triangles])
+        mesh = trimesh.Trimesh(corners.reshape(-1, 3), np.arange(corners.shape[0] * 3).reshape(-1, 3), process=False)
         if mesh.area > 0:
             pts, _ = trimesh.sample.sample_surface(mesh, MESH_SAMPLES, seed=0)
             return np.asarray(pts, dtype=np.float64)

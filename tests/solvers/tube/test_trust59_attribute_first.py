@@ -1,0 +1,48 @@
+"""A header-less scan whose rows write an attribute before x, y, z (an intensity, a class, a point number that does
+not count the rows: whole numbers, where the coordinates write decimals) is read from the next three columns and
+says so (``first_column_skipped``). Read as x, the intensity made a straight tube of 4,095 mm from intensity, x and y
+with status ok."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.tube.upload import parse_upload
+
+POINTS = np.loadtxt(Path(__file__).parents[3] / "examples" / "tube" / "scan.xyz")
+RNG = np.random.default_rng(59)
+
+
+def _read(text: str):
+    request = parse_upload(StoredInput.from_bytes("scan.xyz", text.encode()), None)
+    return np.asarray(request.points), {w.code: w for w in request.source.warnings}
+
+
+@pytest.mark.parametrize("sep", [" ", ",", "\t"])
+@pytest.mark.parametrize("attribute", ["intensity", "point number"])
+def test_a_whole_number_column_before_x_y_z_is_left_out_and_said(sep, attribute):
+    values = RNG.integers(0, 4096, len(POINTS)) if attribute == "intensity" else RNG.permutation(len(POINTS)) + 1000
+    text = "".join(f"{v}{sep}{x:.3f}{sep}{y:.3f}{sep}{z:.3f}\n" for v, (x, y, z) in zip(values, POINTS))
+    points, warned = _read(text)
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+    assert warned["first_column_skipped"].details["x_y_z_columns"] == [2, 3, 4]
+
+
+def test_an_intensity_after_x_y_z_stays_where_it_is():
+    text = "".join(f"{x:.3f} {y:.3f} {z:.3f} {v}\n" for v, (x, y, z) in zip(RNG.integers(0, 4096, len(POINTS)), POINTS))
+    points, warned = _read(text)
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+    assert "first_column_skipped" not in warned
+
+
+def test_x_written_as_whole_numbers_with_y_z_and_a_varying_fourth_column_in_decimals_stays_x():
+    # a profile scanner stepping x by 1 mm, printed without decimals, with a reflectance after y, z: x runs up
+    x = np.repeat(np.arange(200), 5)
+    a = RNG.uniform(0.0, 2.0 * np.pi, len(x))
+    text = "".join(f"{v},{12.5 * np.cos(t):.4f},{12.5 * np.sin(t):.4f},{r:.2f}\n"
+                   for v, t, r in zip(x, a, RNG.uniform(0.2, 0.9, len(x))))
+    points, warned = _read(text)
+    np.testing.assert_allclose(points[:, 0], x)
+    assert "first_column_skipped" not in warned
