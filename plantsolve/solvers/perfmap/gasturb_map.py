@@ -199,6 +199,45 @@ def _read_table(src: _Lines, name: str, keyword_line: int) -> Table:
         raise reject(f"line {n}: the {name} table's key {key:g} announces {rows - 1} rows of {cols - 1} values; at "
                      f"most {MAX_ROWS} of {MAX_ARGUMENTS} are read (GSP reads {GSP_MAX_PARAMETERS} of {GSP_MAX_ARGUMENTS})", ("file", "line", n))
     src.i += 1
+    try:
+        return _read_records(src, name, keyword_line, head, n, rows, cols)
+    except InputRejected as exc:
+        broken = _layout_break(src.lines, name, n, rows, cols, exc)
+        if broken is None:
+            raise
+        raise reject(broken[1] + f"; read on as written, the table goes wrong later: {exc.errors[0].msg}",
+                     ("file", "line", broken[0])) from None
+
+
+def _layout_break(lines: list[str], name: str, key_line: int, rows: int, cols: int, exc: InputRejected
+                  ) -> tuple[int, str] | None:
+    """The line before the one a table's reading failed at that breaks the layout its key announces: every record
+    (the key's, then each speed's) starts a line and is wrapped at one width, so each line holds that many values
+    but a record's last. A value lost or added there shifts every later record: the failure surfaces lines later
+    (the next speed's first line read as values), at a line that is as it should be."""
+    failed = exc.errors[0].loc[-1] if exc.errors and exc.errors[0].loc[:2] == ("file", "line") else None
+    if not isinstance(failed, int) or failed <= key_line:
+        return None
+    counts = [len(line.split()) for line in lines[key_line - 1:failed - 1]]
+    if not counts:
+        return None
+    width = max(set(counts), key=lambda c: (counts.count(c), c))  # most lines of a wrapped table are full
+    if width < 2:
+        return None
+    record = [width] * (cols // width) + ([cols % width] if cols % width else [])
+    expected = record * rows
+    for k, (got, want) in enumerate(zip(counts, expected)):
+        if got != want:
+            where = key_line + k
+            return where, (f"line {where}: {got} value(s) where the {name} table's layout puts {want} (its key, "
+                           f"line {key_line}: {rows - 1} speed rows of {cols - 1} values, {width} a line, each speed "
+                           "starting a line): a value " + ("lost" if got < want else "added") + " there?")
+    return None
+
+
+def _read_records(src: _Lines, name: str, keyword_line: int, head: list[float], n: int, rows: int, cols: int
+                  ) -> Table:
+    """The table after its key's first line: the arguments, then one record per speed."""
     args, arg_lines = _read_values(src, head[1:], cols - 1, name, keyword_line, "arguments")
     _refuse_beyond_bound(args, arg_lines, name, "argument")
     params, values, value_lines, param_lines = [], [], [], []
