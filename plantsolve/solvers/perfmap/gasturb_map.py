@@ -41,7 +41,7 @@ from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
 from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
-from plantsolve.solvers.perfmap.units import UnitError, check_quantity
+from plantsolve.solvers.perfmap.units import UnitError, check_quantity, parse_speed_unit
 from plantsolve.solvers.skipped_input import truncated_file
 
 SPEED_TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio")
@@ -60,6 +60,8 @@ _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
 _SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"
                            r"(?:\[([^\]]*)\])?\s*$")
 _TITLE_UNIT = re.compile(r"\b(flow|pressure)\s*\[([^\]]+)\]", re.IGNORECASE)
+# this service's export states a speed that is no relative speed (rpm, %) in its title: 'speed [rpm]'
+_TITLE_SPEED = re.compile(r";\s*flow\b[^;]*?,\s*speed\s*\[([^\]]+)\]", re.IGNORECASE)
 _REYNOLDS = re.compile(r"RNI\s*=\s*(\S+?)\s+f\s*=\s*(\S+)", re.IGNORECASE)
 
 
@@ -541,6 +543,19 @@ def _same_unit(a, b) -> bool:
         return False
 
 
+def _title_speed_unit(title: str) -> str | None:
+    """The speed unit a title states ('speed [rpm]', as this service's export writes a map fitted in rpm or per
+    cent), or None; a unit that is no speed is refused naming the title."""
+    m = _TITLE_SPEED.search(title)
+    if m is None:
+        return None
+    try:
+        parse_speed_unit(m.group(1).strip())
+    except UnitError as e:
+        raise reject(f"the title's speed unit: {e}", ("file", "title")) from None
+    return m.group(1).strip()
+
+
 def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | None]:
     """(units, where the flow unit came from): the upload's units option, else a unit in brackets on the Mass Flow
     table's line ('Mass Flow [kg/s]'), else a 'flow [unit]' in the title."""
@@ -658,9 +673,11 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[int],
     vg = sets[0].setting is not None
     top_speed = max(p["setting"][-1] for p in positions)
     relative = top_speed <= MAX_RELATIVE_SPEED
+    titled = _title_speed_unit(title)
+    speed_unit = titled or ("1" if relative else "")
     names = [sets[0].label, "Nc"] if vg else ["Nc"]
-    setting_units = [sets[0].unit, "1" if relative else ""] if vg else ["1" if relative else ""]
-    if not relative:
+    setting_units = [sets[0].unit, speed_unit] if vg else [speed_unit]
+    if not relative and titled is None:
         notes.append(Diagnostic(code="implausible_speed", message=(
             f"Speed {top_speed:g} in a GasTurb/GSP map: plausible relative corrected speeds are 0 to "
             f"{MAX_RELATIVE_SPEED:g} (GasTurb writes N/sqrt(T) over its reference value, e.g. 0.45 to 1.1); percent or "
@@ -677,13 +694,16 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[int],
                                                  "pressure": lt.values[0].tolist()})
     what = (f"GasTurb/GSP compressor map (type {map_type if map_type is not None else 'not stated'}"
             f"{', ' + repr(title) if title else ''}): {len(positions)} speed lines of {len(flow.args)} beta points"
-            f"{f' at {len(sets)} values of {sets[0].label}' if vg else ''}. Speed: relative corrected speed "
-            f"N/sqrt(T) over its map reference (dimensionless); flow: corrected mass flow W sqrt(T)/P "
+            f"{f' at {len(sets)} values of {sets[0].label}' if vg else ''}. Speed: "
+            + (f"in {titled}, as the title states" if titled else
+               "relative corrected speed N/sqrt(T) over its map reference (dimensionless)")
+            + "; flow: corrected mass flow W sqrt(T)/P "
             f"({'in ' + flow_unit + ', from the ' + unit_source if flow_unit else 'the file states no unit: GasTurb writes kg/s in SI, lb/s in imperial units; give it with the units option'}); "
             "pressure ratio; efficiency a fraction.")
     notes.insert(0, Diagnostic(code="upload_settings", message=what, details={
         "format": "gasturb", "map_type": map_type, "title": title, "names": names, "units": setting_units,
-        "speed": "relative corrected speed (N/sqrt(T)) / (N/sqrt(T))_ref, dimensionless",
+        "speed": f"in {titled} (the title)" if titled else "relative corrected speed (N/sqrt(T)) / (N/sqrt(T))_ref, "
+                 "dimensionless",
         "flow": f"corrected mass flow W sqrt(T)/P [{flow_unit or 'unit not stated'}]", "flow_unit_from": unit_source,
         "beta": [float(b) for b in flow.args], "reynolds": reynolds,
         "surge_line": limits.get("Surge Line"), "choke_line": limits.get("Choke Line")}))

@@ -50,5 +50,5 @@ def test_a_value_lost_in_a_one_record_a_line_map_is_named_on_its_line():
 def test_a_map_cut_inside_a_table_is_still_a_cut_file_not_a_layout_break():
     text = (GASTURB / "bigfand.map").read_text()
     cut = text[:text.index("Efficiency")] + "Efficiency\n" + text[text.index("Efficiency") + 11:][:200]
-    loc, msg = _refusal(cut.rsplit("\n", 1)[0] + "\n")
+    _, msg = _refusal(cut.rsplit("\n", 1)[0] + "\n")
     assert "layout puts" not in msg
