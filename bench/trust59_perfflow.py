@@ -1,7 +1,7 @@
 """Users' mistakes with perfmap and flowmeter, round 59 (beside bench/trust58_perfflow.py's, not repeated): a
 per-cent efficiency without its unit, a pressure column labelled kPa holding ratios, a speed line of one point, an
 empty or cut workbook sheet, NaN and 1e300 cells, a whole map of inverse ratios, rows and columns in other orders
-(CSV, workbook, GasTurb speed lines), another kind's file (IFC, STL, tube scan) sent to either kind; a flowmeter
+(CSV, workbook, GasTurb speed lines), a workbook a few bytes short, another kind's file (IFC, STL, tube scan) sent to either kind; a flowmeter
 with probe points outside the pipe, electrodes longer than the liner or a hair long (metres under mm), a field
 file of another kind; GasTurb maps with a value lost or added inside a wrapped record; the GasTurb export of a map in
 rpm or per cent (GasTurb reads a map's speed as relative), read back by this service.
@@ -128,6 +128,8 @@ def perfmap_cases() -> list[tuple]:
         ("perfmap", "xlsx an empty first sheet, the table on the second", "map.xlsx",
          _xlsx_sheets({"Notes": [], "Data": [lines[0].split(",")] + numbers}), None, "same", _xlsx(lines)),
         ("perfmap", "xlsx only an empty sheet", "map.xlsx", _xlsx_sheets({"Sheet1": []}), None, "flag", None),
+        ("perfmap", "xlsx cut 10 bytes short (inside its zip directory's end record)", "map.xlsx",
+         _xlsx(lines)[:-10], None, "flag", None),
         ("perfmap", "xlsx last row cut (two cells missing)", "map.xlsx", _xlsx_cells(cut_sheet), None, "flag", None),
         ("perfmap", "clean GasTurb .map", "fan.map", gasturb.encode(), None, "same", None),
         ("perfmap", "an IFC sent as .csv", "map.csv", ifc.encode(), None, "flag", None),
