@@ -1,10 +1,10 @@
-"""Users' mistakes with perfmap and flowmeter, round 59 (beside bench/trust58_perfflow.py's, not repeated): a
-per-cent efficiency without its unit, a pressure column labelled kPa holding ratios, a speed line of one point, an
-empty or cut workbook sheet, NaN and 1e300 cells, a whole map of inverse ratios, rows and columns in other orders
-(CSV, workbook, GasTurb speed lines), a workbook a few bytes short, another kind's file (IFC, STL, tube scan) sent to either kind; a flowmeter
-with probe points outside the pipe, electrodes longer than the liner or a hair long (metres under mm), a field
-file of another kind; GasTurb maps with a value lost or added inside a wrapped record; the GasTurb export of a map in
-rpm or per cent (GasTurb reads a map's speed as relative), read back by this service.
+"""Users' mistakes with perfmap and flowmeter, round 59 (beside bench/trust58_perfflow.py's, not repeated): a per-cent
+efficiency without its unit, a pressure column labelled kPa holding ratios, a speed line of one point, an empty or
+cut workbook sheet, NaN and 1e300 cells, a whole map of inverse ratios, rows and columns in other orders (CSV,
+workbook, GasTurb speed lines), a workbook a few bytes short, another kind's file (IFC, STL, tube scan) sent to
+either kind; a flowmeter with probe points outside the pipe, electrodes longer than the liner or a hair long (metres
+under mm), a field file of another kind; GasTurb maps with a value lost or added inside a wrapped record; the
+GasTurb export of a map in rpm or per cent (GasTurb reads a map's speed as relative), read back by this service.
 
 Same machinery and outcome classes as bench/trust58_perfflow.py (``same`` / ``flag`` / ``look``; ``WRONG`` is a
 confident wrong answer).

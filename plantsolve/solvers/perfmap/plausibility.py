@@ -217,8 +217,8 @@ def exports_speed_not_relative(names: list[str], units: list[str | None], speeds
         return None
     if parsed is not None and parsed.dimensionless and parsed.text == "1":
         return None
-    if parsed is None and values.max() <= RELATIVE_SPEED_MAX:
-        return None
+    if parsed is None and (values.max() <= RELATIVE_SPEED_MAX or not named_as_speed(names[-1])):
+        return None  # a unitless setting not named as the speed (the paper's phi) is not judged, as above
     if parsed is not None and not parsed.dimensionless and revolutions_per_minute(parsed.unit) is None:
         return None  # not a rotational speed (an angle is exports_last_setting_not_speed's)
     written = f"{_range(values)} {unit}" if unit else f"{_range(values)} (no unit stated)"
