@@ -25,9 +25,6 @@ RADIAN_HALF_ANGLE = math.pi / 2  # a patch's half-angle in radians is at most th
 GRID_REACH = 50.0
 # a protruding button enters the flow by a visible fraction of R; less than this is metres written with units 'mm'
 PROTRUSION_MIN = 1e-3
-# a patch electrode runs along the pipe for a visible fraction of R (meters' patches: some 0.05 R to a few R); shorter
-# than this it is metres written with units 'mm', and S is the vanishing patch's (0.973 for 0.965 at beta 22.5 deg)
-PATCH_LENGTH_MIN = 1e-3
 
 
 def _outside(value: float, bounds: tuple[float, float]) -> bool:
@@ -73,7 +70,7 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             + ("mm/s or cm/s written as m/s?" if abs(mean) > VELOCITY_M_S[1] else "a flow rate instead of a velocity?"),
             details={"quantity": quantity, "value": mean, "range_m_s": list(VELOCITY_M_S)}))
     out += (_file_unit_warnings(request, grid) + _cut_file_warning(grid) + _probe_warnings(request)
-            + _grid_warnings(request, grid) + _protrusion_warnings(request) + _patch_length_warnings(request))
+            + _grid_warnings(request, grid) + _protrusion_warnings(request))
     e = request.electrodes
     if e.shape == "patch" and e.half_angle <= RADIAN_HALF_ANGLE:
         out.append(Diagnostic(
@@ -197,22 +194,6 @@ def _protrusion_warnings(request: FlowmeterRequest) -> list[Diagnostic]:
         f"'{request.units}' (metres with units 'mm')? The protrusion is in the request's units, and a protruding "
         "button's sensitivity falls with it.",
         details={"quantity": "electrodes.protrusion", "value": e.protrusion, "radius": radius, "units": request.units})]
-
-
-def _patch_length_warnings(request: FlowmeterRequest) -> list[Diagnostic]:
-    """A patch a hair of the radius long: a half-length in metres written with units 'mm'."""
-    e = request.electrodes
-    radius = request.pipe.radius
-    if e.shape != "patch" or e.half_length is None or not e.half_length < PATCH_LENGTH_MIN * radius:
-        return []
-    return [Diagnostic(
-        code="implausible_electrode_half_length",
-        message=f"Electrode half-length: {e.half_length:g} {request.units}, {e.half_length / radius:.2g} of the radius "
-        f"{radius:g} {request.units}: a patch of no length in effect. A length in a unit 1000 times larger than "
-        f"'{request.units}' (metres with units 'mm')? The half-length is in the request's units, and the sensitivity "
-        "depends on it.",
-        details={"quantity": "electrodes.half_length", "value": e.half_length, "radius": radius,
-                 "units": request.units})]
 
 
 def signal_warnings(signal: float, request: FlowmeterRequest) -> list[Diagnostic]:
