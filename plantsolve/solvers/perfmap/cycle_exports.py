@@ -64,6 +64,14 @@ def _unit(result: PerfmapResult, quantity: str) -> str:
     return "unit not stated" if not u else "[-]" if u in ("1", "-") else f"[{u}]"
 
 
+def _speed_unit(result: PerfmapResult) -> str:
+    """', speed [rpm]' where the speed lines are in a unit of their own (rpm, %): the speed column of a GasTurb map
+    is a relative speed, and the title is where the file can say otherwise (this service's .map reader reads it)."""
+    units = result.units.settings if result.units else []
+    u = units[-1] if units else None
+    return "" if not u or u in ("1", "-") else f", speed [{u}]"
+
+
 def _limits_text(result: PerfmapResult) -> str:
     b = result.beta_map
     p = "parabolas" if b.exponent == 2 else "straight lines"
@@ -248,7 +256,8 @@ def gasturb_tables(result: PerfmapResult) -> dict[str, bytes]:
         # no table keyword in the title: readers find the tables by scanning for them
         b = result.beta_map
         title = (f"99    plantsolve perfmap compressor map{' (' + where + ')' if where else ''}; flow "
-                 f"{_unit(result, 'flow')}, pressure {_unit(result, 'pressure')}; beta 0 at choke, 1 at surge, "
+                 f"{_unit(result, 'flow')}, pressure {_unit(result, 'pressure')}{_speed_unit(result)}; beta 0 at "
+                 "choke, 1 at surge, "
                  f"beta lines y - {_g(b.vertex_pressure)} = c (x - {_g(b.vertex_flow)})^{b.exponent}"
                  + ("" if b.table_pressure_max_rel_error is None else
                     f"; table within {100 * b.table_pressure_max_rel_error:.2g} % of the fitted pressure"))

@@ -41,7 +41,7 @@ from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
 from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
-from plantsolve.solvers.perfmap.units import UnitError, check_quantity
+from plantsolve.solvers.perfmap.units import UnitError, check_quantity, parse_speed_unit
 from plantsolve.solvers.skipped_input import truncated_file
 
 SPEED_TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio")
@@ -60,6 +60,8 @@ _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
 _SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"
                            r"(?:\[([^\]]*)\])?\s*$")
 _TITLE_UNIT = re.compile(r"\b(flow|pressure)\s*\[([^\]]+)\]", re.IGNORECASE)
+# this service's export states a speed that is no relative speed (rpm, %) in its title: 'speed [rpm]'
+_TITLE_SPEED = re.compile(r";\s*flow\b[^;]*?,\s*speed\s*\[([^\]]+)\]", re.IGNORECASE)
 _REYNOLDS = re.compile(r"RNI\s*=\s*(\S+?)\s+f\s*=\s*(\S+)", re.IGNORECASE)
 
 
@@ -199,6 +201,45 @@ def _read_table(src: _Lines, name: str, keyword_line: int) -> Table:
         raise reject(f"line {n}: the {name} table's key {key:g} announces {rows - 1} rows of {cols - 1} values; at "
                      f"most {MAX_ROWS} of {MAX_ARGUMENTS} are read (GSP reads {GSP_MAX_PARAMETERS} of {GSP_MAX_ARGUMENTS})", ("file", "line", n))
     src.i += 1
+    try:
+        return _read_records(src, name, keyword_line, head, n, rows, cols)
+    except InputRejected as exc:
+        broken = _layout_break(src.lines, name, n, rows, cols, exc)
+        if broken is None:
+            raise
+        raise reject(broken[1] + f"; read on as written, the table goes wrong later: {exc.errors[0].msg}",
+                     ("file", "line", broken[0])) from None
+
+
+def _layout_break(lines: list[str], name: str, key_line: int, rows: int, cols: int, exc: InputRejected
+                  ) -> tuple[int, str] | None:
+    """The line before the one a table's reading failed at that breaks the layout its key announces: every record
+    (the key's, then each speed's) starts a line and is wrapped at one width, so each line holds that many values
+    but a record's last. A value lost or added there shifts every later record: the failure surfaces lines later
+    (the next speed's first line read as values), at a line that is as it should be."""
+    failed = exc.errors[0].loc[-1] if exc.errors and exc.errors[0].loc[:2] == ("file", "line") else None
+    if not isinstance(failed, int) or failed <= key_line:
+        return None
+    counts = [len(line.split()) for line in lines[key_line - 1:failed - 1]]
+    if not counts:
+        return None
+    width = max(set(counts), key=lambda c: (counts.count(c), c))  # most lines of a wrapped table are full
+    if width < 2:
+        return None
+    record = [width] * (cols // width) + ([cols % width] if cols % width else [])
+    expected = record * rows
+    for k, (got, want) in enumerate(zip(counts, expected)):
+        if got != want:
+            where = key_line + k
+            return where, (f"line {where}: {got} value(s) where the {name} table's layout puts {want} (its key, "
+                           f"line {key_line}: {rows - 1} speed rows of {cols - 1} values, {width} a line, each speed "
+                           "starting a line): a value " + ("lost" if got < want else "added") + " there?")
+    return None
+
+
+def _read_records(src: _Lines, name: str, keyword_line: int, head: list[float], n: int, rows: int, cols: int
+                  ) -> Table:
+    """The table after its key's first line: the arguments, then one record per speed."""
     args, arg_lines = _read_values(src, head[1:], cols - 1, name, keyword_line, "arguments")
     _refuse_beyond_bound(args, arg_lines, name, "argument")
     params, values, value_lines, param_lines = [], [], [], []
@@ -502,6 +543,19 @@ def _same_unit(a, b) -> bool:
         return False
 
 
+def _title_speed_unit(title: str) -> str | None:
+    """The speed unit a title states ('speed [rpm]', as this service's export writes a map fitted in rpm or per
+    cent), or None; a unit that is no speed is refused naming the title."""
+    m = _TITLE_SPEED.search(title)
+    if m is None:
+        return None
+    try:
+        parse_speed_unit(m.group(1).strip())
+    except UnitError as e:
+        raise reject(f"the title's speed unit: {e}", ("file", "title")) from None
+    return m.group(1).strip()
+
+
 def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | None]:
     """(units, where the flow unit came from): the upload's units option, else a unit in brackets on the Mass Flow
     table's line ('Mass Flow [kg/s]'), else a 'flow [unit]' in the title."""
@@ -619,9 +673,11 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[int],
     vg = sets[0].setting is not None
     top_speed = max(p["setting"][-1] for p in positions)
     relative = top_speed <= MAX_RELATIVE_SPEED
+    titled = _title_speed_unit(title)
+    speed_unit = titled or ("1" if relative else "")
     names = [sets[0].label, "Nc"] if vg else ["Nc"]
-    setting_units = [sets[0].unit, "1" if relative else ""] if vg else ["1" if relative else ""]
-    if not relative:
+    setting_units = [sets[0].unit, speed_unit] if vg else [speed_unit]
+    if not relative and titled is None:
         notes.append(Diagnostic(code="implausible_speed", message=(
             f"Speed {top_speed:g} in a GasTurb/GSP map: plausible relative corrected speeds are 0 to "
             f"{MAX_RELATIVE_SPEED:g} (GasTurb writes N/sqrt(T) over its reference value, e.g. 0.45 to 1.1); percent or "
@@ -638,13 +694,16 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[int],
                                                  "pressure": lt.values[0].tolist()})
     what = (f"GasTurb/GSP compressor map (type {map_type if map_type is not None else 'not stated'}"
             f"{', ' + repr(title) if title else ''}): {len(positions)} speed lines of {len(flow.args)} beta points"
-            f"{f' at {len(sets)} values of {sets[0].label}' if vg else ''}. Speed: relative corrected speed "
-            f"N/sqrt(T) over its map reference (dimensionless); flow: corrected mass flow W sqrt(T)/P "
+            f"{f' at {len(sets)} values of {sets[0].label}' if vg else ''}. Speed: "
+            + (f"in {titled}, as the title states" if titled else
+               "relative corrected speed N/sqrt(T) over its map reference (dimensionless)")
+            + "; flow: corrected mass flow W sqrt(T)/P "
             f"({'in ' + flow_unit + ', from the ' + unit_source if flow_unit else 'the file states no unit: GasTurb writes kg/s in SI, lb/s in imperial units; give it with the units option'}); "
             "pressure ratio; efficiency a fraction.")
     notes.insert(0, Diagnostic(code="upload_settings", message=what, details={
         "format": "gasturb", "map_type": map_type, "title": title, "names": names, "units": setting_units,
-        "speed": "relative corrected speed (N/sqrt(T)) / (N/sqrt(T))_ref, dimensionless",
+        "speed": f"in {titled} (the title)" if titled else "relative corrected speed (N/sqrt(T)) / (N/sqrt(T))_ref, "
+                 "dimensionless",
         "flow": f"corrected mass flow W sqrt(T)/P [{flow_unit or 'unit not stated'}]", "flow_unit_from": unit_source,
         "beta": [float(b) for b in flow.args], "reynolds": reynolds,
         "surge_line": limits.get("Surge Line"), "choke_line": limits.get("Choke Line")}))

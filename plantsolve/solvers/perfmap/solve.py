@@ -45,7 +45,7 @@ from plantsolve.solvers.perfmap.fitting import (
     fit_eta_setting,
     fit_pressure_setting,
 )
-from plantsolve.solvers.perfmap.plausibility import last_setting_not_speed
+from plantsolve.solvers.perfmap.plausibility import exports_speed_not_relative, last_setting_not_speed
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from plantsolve.solvers.perfmap.triangulation import map_simplices
 from plantsolve.solvers.perfmap.validation import PerfmapInput, loaded
@@ -663,6 +663,9 @@ def _performance(value: PerfmapInput, progress: Progress) -> PerfmapResult:
         beta_map.c_unit = _c_unit(units, beta_map.exponent)
         if (misplaced := last_setting_not_speed(request.setting_names, units.settings)) is not None:
             warnings.append(misplaced)
+        elif (scaled := exports_speed_not_relative(request.setting_names, units.settings,
+                                                   [s.values[-1] for s in settings])) is not None:
+            warnings.append(scaled)
     progress(0.62, "surge and choke lines and the beta grid done")
 
     ranges = curve_ranges(curves)

@@ -86,6 +86,15 @@ def _label(text: str) -> bool:
     return any(ch.isalpha() for ch in text) and split_cell(text)[1] is None
 
 
+def _directory_cut(content: bytes) -> bool:
+    """Whether a zip archive lacks the whole end record of its directory (22 bytes and its comment, last in the
+    file): the file was cut, even when the cut falls inside that record and leaves its signature."""
+    end = content.rfind(b"PK\x05\x06", max(0, len(content) - (1 << 16) - 22))
+    if end < 0 or end + 22 > len(content):
+        return True
+    return end + 22 + int.from_bytes(content[end + 20:end + 22], "little") > len(content)
+
+
 def read_workbook(content: bytes, max_rows: int) -> list[Sheet]:
     """The workbook's sheets in order (hidden ones last); raises :class:`InputRejected` when it is not a
     readable .xlsx or a sheet is longer than ``max_rows``."""
@@ -94,7 +103,7 @@ def read_workbook(content: bytes, max_rows: int) -> list[Sheet]:
         formulas = openpyxl.load_workbook(io.BytesIO(content), data_only=False)
     except (zipfile.BadZipFile, InvalidFileException, KeyError, ValueError, TypeError, OSError, EOFError,
             IndexError, AttributeError) as e:
-        if content[:4] == b"PK\x03\x04" and b"PK\x05\x06" not in content[-(1 << 16) - 22:]:
+        if content[:4] == b"PK\x03\x04" and _directory_cut(content):
             # a zip archive ends with its directory: without it the workbook was cut, and no sheet can be found
             raise reject(f"not a readable Excel .xlsx workbook: it is cut short, ending after {len(content):,} bytes, "
                          "before the zip directory every .xlsx ends with (an incomplete upload or copy?); send the "
