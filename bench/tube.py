@@ -373,6 +373,8 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: in
     for fam in fams:
         for side, rows in sides.items():
             rows = [r for r in rows if r["case"].startswith(fam + "-")]
+            if not rows:  # a family asked for none (--random-tubes 0)
+                continue
             ok = [r for r in rows if r["got"] == truth_n[r["case"]]]
             worst = {key: max((r[key] for r in ok if r[key] is not None), default=None)
                      for key in ("radius", "radius_big", "angle", "end")}
