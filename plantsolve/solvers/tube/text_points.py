@@ -274,8 +274,10 @@ def _whole_then_decimals(lines: list[str]) -> bool:
     three with decimals, in every row looked at: an attribute written before x, y, z by a file without a header (an
     intensity, a class, a point number that does not count the rows). A writer prints a scan's three coordinates
     alike; read as x, the attribute made the tube of an intensity, x and y (a straight of 4,095 mm with status
-    ok). Not where the first column runs up (x sampled a unit apart, a profile scanner's steps) or the fourth is
-    constant (an attribute after x, y, z: no point of a tube's surface shares a coordinate with its neighbours)."""
+    ok). Not where the first column runs up or is held over runs of rows (x sampled a unit apart, a profile
+    scanner's steps, up or down), where the fourth is constant (an attribute after x, y, z: no point of a tube's
+    surface shares a coordinate with its neighbours), or where the next three are not written alike (the same
+    number of decimals, most often): then the fourth is an attribute after y and z."""
     rows = []
     for line in lines:
         s = line.strip()
@@ -290,7 +292,9 @@ def _whole_then_decimals(lines: list[str]) -> bool:
         return False
     first = np.array([float(r[0]) for r in rows])
     fourth = np.array([float(r[3]) for r in rows])
-    return bool(np.any(np.diff(first) < 0)) and bool(np.ptp(fourth) > 0)
+    held = float(np.mean(np.diff(first) == 0))
+    written = {Counter(cell_decimals(r[k]) for r in rows).most_common(1)[0][0] for k in (1, 2, 3)}
+    return bool(np.any(np.diff(first) < 0)) and held < 0.5 and bool(np.ptp(fourth) > 0) and len(written) == 1
 
 
 def _number_rows(lines: list[str]) -> list[str]:
