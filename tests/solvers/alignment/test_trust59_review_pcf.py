@@ -28,3 +28,16 @@ def test_a_pipe_typed_twice_where_a_weld_meets_a_pipe_is_still_named(far):
 
 def test_the_same_file_as_meant_names_no_pipe():
     assert "pcf_zero_length_pipe" not in _warnings(TYPED_TWICE.format(far="2000.0"))
+
+
+def test_the_units_option_refusal_names_the_files_units_not_an_items_own():
+    from plantsolve.solvers.alignment.upload import parse_upload
+    from plantsolve.solvers.base import InputRejected, StoredInput
+
+    text = ("PIPELINE-REFERENCE LINE-100\n    UNITS-BORE INCH\n    UNITS-CO-ORDS MM\n"
+            + TYPED_TWICE.format(far="2000.0").split("\n", 2)[2].replace(
+                "WELD\n", "WELD\n    UNITS-BORE MM\n", 1))
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("line.pcf", text.encode()), {"units": "in"})
+    msg = refused.value.errors[0].msg
+    assert "UNITS-BORE INCH (line 2), UNITS-CO-ORDS MM (line 3)." in msg and "UNITS-BORE MM" not in msg
