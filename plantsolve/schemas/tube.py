@@ -178,7 +178,10 @@ class TubeOptions(StrictModel):
         default="auto",
         description="How the bend radii are fitted: 'common' (one die: one radius for all bends), 'dies' (two "
         "dies: two radii, bends assigned by the data), 'per_bend' (a free radius per bend), or 'auto' (the one "
-        "with the smallest Bayesian information criterion on the surface residuals; reported in the result).",
+        "with the smallest Bayesian information criterion on the surface residuals; reported in the result). It, "
+        "`bend_radius`, `common_bend_radius` and `dies` must state one rule (422 naming them otherwise): a fixed "
+        "`bend_radius` or `common_bend_radius` goes with 'common' or 'auto', `dies` with 'dies' or 'auto' (a single "
+        "die also with 'common' and with a `bend_radius` equal to it).",
     )
     dies: list[Annotated[Number, Field(gt=0, le=MAX_OPTION_LENGTH, allow_inf_nan=False)]] | None = Field(
         default=None, min_length=1, max_length=20,
