@@ -359,8 +359,10 @@ def _whole_then_decimals(lines: list[str]) -> bool:
     alike; read as x, the attribute made the tube of an intensity, x and y (a straight of 4,095 mm with status
     ok). Not where the first column runs up or is held over runs of rows (x sampled a unit apart, a profile
     scanner's steps, up or down), where the fourth is constant (an attribute after x, y, z: no point of a tube's
-    surface shares a coordinate with its neighbours), or where the next three are not written alike (the same
-    number of decimals, most often): then the fourth is an attribute after y and z."""
+    surface shares a coordinate with its neighbours), where the next three are not written alike (the same
+    number of decimals, most often): then the fourth is an attribute after y and z, nor where the next three are
+    flat (:data:`FLAT`) and the first three not (a reflectance of 0 to 1 after y and z, read as z, made a tube of
+    no thickness; a long straight tube is flat either way)."""
     rows = []
     for line in lines:
         s = line.strip()
@@ -377,7 +379,19 @@ def _whole_then_decimals(lines: list[str]) -> bool:
     fourth = np.array([float(r[3]) for r in rows])
     held = float(np.mean(np.diff(first) == 0))
     written = {Counter(cell_decimals(r[k]) for r in rows).most_common(1)[0][0] for k in (1, 2, 3)}
-    return bool(np.any(np.diff(first) < 0)) and held < 0.5 and bool(np.ptp(fourth) > 0) and len(written) == 1
+    values = np.array([[float(c) for c in r[:4]] for r in rows])
+    return (bool(np.any(np.diff(first) < 0)) and held < 0.5 and bool(np.ptp(fourth) > 0) and len(written) == 1
+            and not (_flat(values[:, 1:4]) and not _flat(values[:, :3])))
+
+
+# A scan whose smallest extent is less than this share of its largest is flat: no tube of a length under a hundred
+# diameters (a reflectance of 0 to 1 beside coordinates of a hundred millimetres is)
+FLAT = 0.01
+
+
+def _flat(xyz: np.ndarray) -> bool:
+    extent = np.ptp(xyz, axis=0)
+    return bool(extent.min() < FLAT * extent.max())
 
 
 def _number_rows(lines: list[str]) -> list[str]:

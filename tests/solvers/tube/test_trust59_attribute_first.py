@@ -60,11 +60,12 @@ def test_x_stepped_down_in_whole_numbers_stays_x():
     assert "first_column_skipped" not in warned
 
 
-def test_whole_x_before_y_z_and_an_attribute_printed_otherwise_stays_x():
-    # review: x y z and a reflectance, x written as whole numbers, y and z to 0.001, the reflectance to 0.01: the
-    # three columns after x are not written alike, so they are not the coordinates
+@pytest.mark.parametrize("written", ["2f", "3f"])
+def test_whole_x_before_y_z_and_a_reflectance_stays_x(written):
+    # review: x y z and a reflectance, x written as whole numbers, y and z to 0.001: the reflectance to 0.01 is not
+    # written as y and z are; to 0.001 it is, but read as z it made a tube of no thickness (0 to 1 mm)
     values = RNG.uniform(0.0, 1.0, len(POINTS))
-    text = "".join(f"{round(x)} {y:.3f} {z:.3f} {r:.2f}\n" for r, (x, y, z) in zip(values, POINTS))
+    text = "".join(f"{round(x)} {y:.3f} {z:.3f} {r:{written}}\n" for r, (x, y, z) in zip(values, POINTS))
     points, warned = _read(text)
     np.testing.assert_allclose(points, np.c_[np.round(POINTS[:, 0]), POINTS[:, 1:]], atol=5e-4)
     assert "first_column_skipped" not in warned
