@@ -234,7 +234,7 @@ def _review_column_cases():
     yield "tube: x y z r, whole x, r to 0.01", read("scan.xyz", "".join(
         f"{x:.0f} {y:.3f} {z:.3f} {r:.2f}\n" for (x, y, z), r in zip(whole_x, rng.uniform(0, 1, len(points)))),
         whole_x)
-    yield "tube: x y z r, whole x, r to 0.001 (left as found)", read("scan.xyz", "".join(
+    yield "tube: x y z r, whole x, r (0 to 1) to 0.001 as y, z", read("scan.xyz", "".join(
         f"{x:.0f} {y:.3f} {z:.3f} {r:.3f}\n" for (x, y, z), r in zip(whole_x, rng.uniform(0, 1, len(points)))),
         whole_x)
     yield "tube: Point,X,Y,Z over P0,...", read("scan.csv", "Point,X,Y,Z\n" + "".join(
