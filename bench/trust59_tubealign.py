@@ -9,10 +9,14 @@ a word or two.
   corners rolled or its vertices renumbered: the same LRA?
 - a PLY scan whose header declares an (empty) face element before the vertex element, or names the coordinates X Y Z;
 - tube bend radius options that contradict each other (one of them silently won);
-- a header-less scan writing an intensity before x, y, z.
+- a header-less scan writing an intensity before x, y, z;
+- (trust59a2, the review) a PIPE typed twice where a weld meets a pipe (taken for a gap filler), one die with
+  ``bend_radius_model: 'common'`` (refused), a whole-numbered x stepping down or before y, z and a reflectance
+  written otherwise (left out as an attribute), a text column beside named x, y, z (refused as holding no rows),
+  inspection tolerances without a nominal (ignored without a word).
 
     git -C /work/main worktree add --detach /work/wt/trust59a-ref main
-    python bench/trust59_tubealign.py --ref /work/wt/trust59a-ref
+    python bench/trust59_tubealign.py --ref /work/wt/trust59a-ref [--ref /work/wt/trust59a ...]
 """
 
 from __future__ import annotations
@@ -50,6 +54,13 @@ ELBOW = ("UNITS-BORE MM\nUNITS-CO-ORDS MM\n"
          "ELBOW\n    END-POINT 1000.0 0.0 0.0 100.0\n    END-POINT 1152.4 152.4 0.0 100.0\n"
          "    CENTRE-POINT 1152.4 0.0 0.0\n    BEND-RADIUS {radius}\n"
          "PIPE\n    END-POINT 1152.4 152.4 0.0 100.0\n    END-POINT 1152.4 1152.4 0.0 100.0\n")
+TYPED_TWICE = ("UNITS-BORE MM\nUNITS-CO-ORDS MM\n"
+               "PIPE\n    END-POINT 0.0 0.0 0.0 100.0\n    END-POINT 1000.0 0.0 0.0 100.0\n"
+               "WELD\n    END-POINT 1000.0 0.0 0.0 100.0\n    END-POINT 1000.0 0.0 0.0 100.0\n"
+               "PIPE\n    END-POINT 1000.0 0.0 0.0 100.0\n    END-POINT {far} 0.0 0.0 100.0\n"
+               "ELBOW\n    END-POINT 2000.0 0.0 0.0 100.0\n    END-POINT 2152.4 152.4 0.0 100.0\n"
+               "    CENTRE-POINT 2152.4 0.0 0.0\n"
+               "PIPE\n    END-POINT 2152.4 152.4 0.0 100.0\n    END-POINT 2152.4 1152.4 0.0 100.0\n")
 WATCHED = ("pcf_units_assumed", "pcf_bore_units", "pcf_records_contradict_points", "pcf_zero_length_pipe",
            "implausible_fitting_span")
 
@@ -79,6 +90,8 @@ def _pcf_cases():
                        "-433.4490 0.0000 152.4000\n    END-POINT -228.6000"))
     for radius in ("0", "-152.4", "nan", "152.4"):
         yield f"PCF: elbow BEND-RADIUS {radius}", said(ELBOW.format(radius=radius))
+    for far, what in (("1000.0", "typed twice where a weld meets a pipe"), ("2000.0", "as meant (guard)")):
+        yield f"PCF: pipe {what}", said(TYPED_TWICE.format(far=far))
 
 
 def _mesh_cases():
@@ -162,7 +175,9 @@ def _option_cases():
 
     xyz = (ROOT / "examples" / "tube" / "scan.xyz").read_bytes()
     for options in ({"bend_radius": 18, "dies": [18, 30]}, {"common_bend_radius": True, "bend_radius_model": "per_bend"},
-                    {"dies": [18, 30], "bend_radius_model": "common"}, {"bend_radius": 18, "bend_radius_model": "common"}):
+                    {"dies": [18, 30], "bend_radius_model": "common"}, {"bend_radius": 18, "bend_radius_model": "common"},
+                    {"dies": [18], "bend_radius_model": "common"}, {"dies": [18], "bend_radius": 18},
+                    {"dies": [18], "bend_radius": 20}):
         try:
             parse_upload(StoredInput.from_bytes("scan.xyz", xyz), options)
             said = "accepted"
@@ -190,24 +205,79 @@ def _column_cases():
                                            f"{result.report.status}" + (f" ({', '.join(codes)})" if codes else ""))
 
 
+def _review_column_cases():
+    import numpy as np
+
+    from plantsolve.solvers.base import InputRejected, StoredInput
+    from plantsolve.solvers.tube.upload import parse_upload
+
+    points = np.loadtxt(ROOT / "examples" / "tube" / "scan.xyz")
+    rng = np.random.default_rng(592)
+
+    def read(name: str, text: str, meant: np.ndarray) -> str:
+        try:
+            request = parse_upload(StoredInput.from_bytes(name, text.encode()), None)
+        except InputRejected as refused:
+            return "422 " + refused.errors[0].msg[:50]
+        got = np.asarray(request.points)
+        codes = [w.code for w in request.source.warnings]
+        right = got.shape == meant.shape and np.allclose(got, meant, atol=1e-3)
+        return ("the file's x, y, z" if right else "other points") + (f" ({', '.join(codes)})" if codes else "")
+
+    steps = np.repeat(np.arange(199, -1, -1), 5).astype(float)
+    a = rng.uniform(0.0, 2.0 * np.pi, len(steps))
+    profile = np.c_[steps, 12.5 * np.cos(a), 12.5 * np.sin(a)].round(3)
+    yield "tube: x y z r, whole x stepping down (a profile scanner)", read("scan.xyz", "".join(
+        f"{x:.0f} {y:.3f} {z:.3f} {r:.3f}\n" for (x, y, z), r in zip(profile, rng.uniform(0.2, 0.9, len(steps)))),
+        profile)
+    whole_x = np.c_[np.round(points[:, 0]), points[:, 1:]]
+    yield "tube: x y z r, whole x, r to 0.01", read("scan.xyz", "".join(
+        f"{x:.0f} {y:.3f} {z:.3f} {r:.2f}\n" for (x, y, z), r in zip(whole_x, rng.uniform(0, 1, len(points)))),
+        whole_x)
+    yield "tube: x y z r, whole x, r (0 to 1) to 0.001 as y, z", read("scan.xyz", "".join(
+        f"{x:.0f} {y:.3f} {z:.3f} {r:.3f}\n" for (x, y, z), r in zip(whole_x, rng.uniform(0, 1, len(points)))),
+        whole_x)
+    yield "tube: Point,X,Y,Z over P0,...", read("scan.csv", "Point,X,Y,Z\n" + "".join(
+        f"P{k},{x:.3f},{y:.3f},{z:.3f}\n" for k, (x, y, z) in enumerate(points)), points)
+    yield "tube: name x y z", read("scan.txt", "name x y z\n" + "".join(
+        f"pt-{k} {x:.3f} {y:.3f} {z:.3f}\n" for k, (x, y, z) in enumerate(points)), points)
+
+
+def _inspection_cases():
+    from plantsolve.schemas.tube import TubeRequest
+    from plantsolve.solvers.tube.solve import solve
+    from plantsolve.solvers.tube.synthetic import example
+
+    for options in ({"inspection_tolerances": {"angle": 0.2}}, {"damping": 0.8},
+                    {"inspection_tolerances": {"angle": 0.2},
+                     "nominal": [{"length": 30.0, "angle": 90.0, "bend_radius": 12.0}, {"length": 30.0}]}):
+        result = solve(TubeRequest.model_validate({**example(), "options": options})).result
+        codes = [w.code for w in result.report.warnings]
+        yield f"tube options {json.dumps(options)[:60]}", (f"status {result.report.status}, "
+                                                           f"inspection {'made' if result.inspection else 'none'}"
+                                                           + (f" ({', '.join(codes)})" if codes else ""))
+
+
 def child() -> None:
     import logging
 
     logging.disable(logging.WARNING)
-    for group in (_pcf_cases, _mesh_cases, _ply_cases, _option_cases, _column_cases):
+    for group in (_pcf_cases, _mesh_cases, _ply_cases, _option_cases, _column_cases, _review_column_cases,
+                  _inspection_cases):
         for case, said in group():
             print(json.dumps({"case": case, "said": said}), flush=True)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--ref", default=None, help="a checkout to answer beside this tree (main's worktree)")
+    parser.add_argument("--ref", action="append", default=[],
+                        help="a checkout to answer beside this tree (main's worktree); may be given more than once")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         child()
         return
-    trees = ([("before", args.ref)] if args.ref else []) + [("after", str(ROOT))]
+    trees = [(Path(ref).name, ref) for ref in args.ref] + [("this tree", str(ROOT))]
     answers = {}
     for label, tree in trees:  # the tree's plantsolve first on the path; the inputs are this script's
         done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--child"], cwd=tree,
@@ -216,7 +286,7 @@ def main() -> None:
         if done.returncode:
             sys.stderr.write(done.stderr[-2000:])
         answers[label] = {row["case"]: row["said"] for row in map(json.loads, done.stdout.splitlines())}
-    cases = list(answers["after"])
+    cases = list(answers["this tree"])
     print("| case | " + " | ".join(label for label, _ in trees) + " |")
     print("| --- | " + " | ".join("---" for _ in trees) + " |")
     for case in cases:

@@ -178,7 +178,10 @@ class TubeOptions(StrictModel):
         default="auto",
         description="How the bend radii are fitted: 'common' (one die: one radius for all bends), 'dies' (two "
         "dies: two radii, bends assigned by the data), 'per_bend' (a free radius per bend), or 'auto' (the one "
-        "with the smallest Bayesian information criterion on the surface residuals; reported in the result).",
+        "with the smallest Bayesian information criterion on the surface residuals; reported in the result). It, "
+        "`bend_radius`, `common_bend_radius` and `dies` must state one rule (422 naming them otherwise): a fixed "
+        "`bend_radius` or `common_bend_radius` goes with 'common' or 'auto', `dies` with 'dies' or 'auto' (a single "
+        "die also with 'common' and with a `bend_radius` equal to it).",
     )
     dies: list[Annotated[Number, Field(gt=0, le=MAX_OPTION_LENGTH, allow_inf_nan=False)]] | None = Field(
         default=None, min_length=1, max_length=20,
@@ -238,23 +241,28 @@ class TubeOptions(StrictModel):
     def _one_radius_rule(self):
         """The bend radius options say one thing: ``bend_radius`` held every bend at it whatever ``dies`` or
         ``bend_radius_model`` said, ``common_bend_radius`` overrode ``bend_radius_model``, ``dies`` overrode both,
-        each without a word (a bend made on a 30 mm die among ``dies: [18, 30]`` was fitted at ``bend_radius: 18``)."""
-        said = {"one radius for every bend": [], "each bend the nearest die": [], "a free radius per bend": []}
+        each without a word (a bend made on a 30 mm die among ``dies: [18, 30]`` was fitted at ``bend_radius: 18``).
+        ``dies`` naming one radius is both one radius for every bend and each bend the nearest die."""
+        one, die, free = "one radius for every bend", "each bend the nearest die", "a free radius per bend"
+        radii = sorted(set(self.dies or []))
+        said: list[tuple[str, set[str]]] = []
         if self.bend_radius is not None:
-            said["one radius for every bend"].append(f"bend_radius {self.bend_radius:g}")
+            said.append((f"bend_radius {self.bend_radius:g}", {one}))
         if self.common_bend_radius:
-            said["one radius for every bend"].append("common_bend_radius")
-        if self.dies:
-            said["each bend the nearest die"].append("dies")
-        rule = {"common": "one radius for every bend", "dies": "each bend the nearest die",
-                "per_bend": "a free radius per bend"}.get(self.bend_radius_model)
-        if rule is not None:
-            said[rule].append(f"bend_radius_model {self.bend_radius_model!r}")
-        rules = [(rule, options) for rule, options in said.items() if options]
-        if len(rules) > 1:
+            said.append(("common_bend_radius", {one}))
+        if radii:
+            said.append((f"dies [{', '.join(f'{r:g}' for r in radii)}]", {one, die} if len(radii) == 1 else {die}))
+        model = {"common": one, "dies": die, "per_bend": free}.get(self.bend_radius_model)
+        if model is not None:
+            said.append((f"bend_radius_model {self.bend_radius_model!r}", {model}))
+        agreed = set.intersection(*(rules for _, rules in said)) if said else set()
+        if said and not agreed:
             raise ValueError("the bend radius options contradict each other: " + "; ".join(
-                f"{' and '.join(options)} {'give' if len(options) > 1 else 'gives'} {rule}" for rule, options in rules)
+                f"{option} gives {' or '.join(sorted(rules))}" for option, rules in said)
                 + ". Leave out all but one of these rules")
+        if self.bend_radius is not None and len(radii) == 1 and radii[0] != self.bend_radius:
+            raise ValueError(f"the bend radius options contradict each other: bend_radius {self.bend_radius:g} holds "
+                             f"every bend at it, dies [{radii[0]:g}] at {radii[0]:g}. Leave out one of them")
         return self
 
 

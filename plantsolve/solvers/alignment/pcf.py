@@ -1315,14 +1315,15 @@ def _end_points_met(doc: Document) -> tuple[cKDTree | None, np.ndarray, float]:
 
 
 def _fills_a_gap(k: int, ends: list[np.ndarray], met: tuple[cKDTree | None, np.ndarray, float]) -> bool:
-    """Item ``k``'s two END-POINTs each meet, as printed, an end point of another item, and not both the same one:
-    a short pipe written to fill the gap between two items (exporters write pipes of 0.4 mm between a flange and a
-    bend), whose both neighbours are joined; an END-POINT typed twice leaves the item at the real far end alone."""
+    """Each of item ``k``'s two END-POINTs meets, as printed, an end point of an item the other END-POINT does not
+    meet: a short pipe written to fill the gap between two items (exporters write pipes of 0.4 mm between a flange
+    and a bend), whose both neighbours are joined. An END-POINT typed twice meets at both ends the items at its near
+    end only (two of them where a weld or a branch joins there) and leaves the item at the real far end alone."""
     tree, owner, eps = met
     if tree is None:
         return False
     near = [{int(owner[j]) for j in tree.query_ball_point(e, eps)} - {k} for e in ends]
-    return any(a != b for a in near[0] for b in near[1])
+    return bool(near[0] - near[1]) and bool(near[1] - near[0])
 
 
 def _zero_length_pipe_notes(doc: Document, geometry: dict) -> list[tuple[str, str, dict, str]]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import codecs
 
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment.pcf import parse_pcf
+from plantsolve.solvers.alignment.pcf import parse_pcf, read_document
 from plantsolve.solvers.alignment.sniff import (
     refuse_other_json,
     refuse_other_text,
@@ -42,7 +42,6 @@ def _decoded(content: bytes) -> tuple[str, str]:
     return content.decode("latin-1"), "latin-1"  # latin-1 decodes every byte
 
 
-_UNIT_RECORDS = ("UNITS-CO-ORDS", "UNITS-BORE")
 FORM = FormRules(AlignmentRequest, units="file")
 
 
@@ -52,8 +51,8 @@ def _refuse_units_option(text: str, options: dict | None) -> None:
     'Extra inputs are not permitted', which said neither. The form's other options are checked along with it."""
     if not isinstance(options, dict) or "units" not in options:
         return
-    stated = [f"{' '.join(line.split()[:2])} (line {i + 1})" for i, line in enumerate(text.splitlines())
-              if line.split()[:1] and line.split()[0].upper() in _UNIT_RECORDS][:4]
+    doc = read_document(text)  # the file's UNITS records, at the margin or indented in its header, not an item's
+    stated = [f"{' '.join(doc.lines[i].split()[:2])} (line {i + 1})" for i in doc.unit_lines][:4]
     errors = [FieldError(("options", "units"), (
         "a PCF states its own units: its UNITS-CO-ORDS record gives the coordinates' unit (millimetres without one) "
         "and UNITS-BORE the bores' (the coordinates' without one); an option does not override them: "

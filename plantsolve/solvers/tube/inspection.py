@@ -100,6 +100,24 @@ def align(measured: TubeModel, nominal: TubeModel,
     return R, t0 + sol.x[3:], res(sol.x)
 
 
+def options_without_nominal(opts: TubeOptions) -> Diagnostic | None:
+    """A warning naming the inspection's options a request sets without a nominal (``inspection_tolerances``, a
+    ``damping``, ``springback_model`` or ``nominal_format`` other than the default): there is nothing to inspect,
+    and they were ignored without a word (tolerances sent for an inspection whose nominal was left out)."""
+    if opts.nominal is not None or opts.nominal_xyz_clr is not None or opts.nominal_csv is not None:
+        return None
+    set_here = opts.inspection_tolerances.model_dump(exclude_none=True)
+    named = [f"inspection_tolerances ({', '.join(set_here)})"] if set_here else []
+    named += [name for name in ("damping", "springback_model", "nominal_format")
+              if getattr(opts, name) != TubeOptions.model_fields[name].default]
+    if not named:
+        return None
+    return Diagnostic(code="inspection_options_ignored", message=(
+        f"options {', '.join(named)} apply to an inspection, and the request gives no nominal (options.nominal, "
+        "nominal_xyz_clr or nominal_csv): they were ignored, no part inspected. Give the nominal to inspect the "
+        "tube against it."), details={"options": [n.split(" ")[0] for n in named]})
+
+
 def inspect_request(measured: TubeModel, opts: TubeOptions, units: str,
                     measured_rows: list[LraRow] | None = None) -> Inspection | None:
     """The inspection the options ask for (None without a nominal)."""

@@ -24,7 +24,7 @@ from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polyg
                                           with_radii)
 from plantsolve.solvers.tube.determined import gap_fields, mark_rows, report_scan_gaps, scan_gaps
 from plantsolve.solvers.tube.given_pipe_radius import given_radius_warning, with_given_radius_hint
-from plantsolve.solvers.tube.inspection import inspect_request, withdraw_verdicts
+from plantsolve.solvers.tube.inspection import inspect_request, options_without_nominal, withdraw_verdicts
 from plantsolve.solvers.tube.inspection_report import report_inspection
 from plantsolve.solvers.tube.nominal_files import resolve_nominal
 from plantsolve.solvers.tube.lra import model_rows
@@ -698,6 +698,8 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
                                    f"files only: the points of a JSON request are in its units ({request.units}).",
                                    details={"file_units": request.options.file_units, "units": request.units}))
     opts = request.options
+    if (ignored := options_without_nominal(opts)) is not None:
+        warnings.append(ignored)
     pts_in = scan.points
     rng = np.random.default_rng(opts.seed)
     # canonical order: the result must not depend on the order of the input samples

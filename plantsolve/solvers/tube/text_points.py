@@ -12,7 +12,8 @@ point. A row written with the file's other decimal mark is left out and named.
 A header line with one name per column is read: columns named x, y, z (``X``, ``x_mm``, ``x [m]``, ``point_x``, or
 easting, northing, elevation) are
 the coordinates wherever they stand (an index column first is common), and a unit they all state is the file's
-unit, in their names or in a line of units under them (``x,y,z`` then ``mm,mm,mm``). Without a header, a first
+unit, in their names or in a line of units under them (``x,y,z`` then ``mm,mm,mm``); a column of text beside
+them (a point's name, ``Point,X,Y,Z`` over ``P12,...``) is left out, said in a warning. Without a header, a first
 column that counts the rows (0 or 1, 2, 3, ...) is a row number: x, y, z are the next three columns (said in a
 warning). A header that names no x, y and z is a table of something else — a compressor map, an LRA or XYZ-CLR
 nominal — and is refused at intake naming its columns, as is a short table of four or five numbers a row (a
@@ -112,6 +113,20 @@ def _name_and_unit(name: str) -> tuple[str, str | None]:
     return m.group("name").strip().lower(), unit if unit is None or two_readings(unit) else unit.lower()
 
 
+def _axes(names: list[str]) -> dict[str, int]:
+    """The column of each axis (x, y, z) the column ``names`` (lower case, units left out) name."""
+    axes: dict[str, int] = {}
+    for i, n in enumerate(names):
+        m = _COORDINATE.match(n)
+        axis = m.group("axis") if m else SURVEY_AXES.get(n)
+        if axis and axis not in axes:
+            axes[axis] = i
+    if not axes and SHORT_SURVEY_NAMES[0] <= set(names) and SHORT_SURVEY_NAMES[1] & set(names):
+        short = {n: i for i, n in reversed(list(enumerate(names)))}  # each name's first column
+        axes = {"x": short["e"], "y": short["n"], "z": min(short[n] for n in SHORT_SURVEY_NAMES[1] if n in short)}
+    return axes
+
+
 def _columns(header: str | None, width: int, header_line: int) -> Columns:
     """The coordinate columns of rows ``width`` numbers wide under ``header`` (the last header line before them).
     A header is a column header when it names as many columns as the rows hold, each name starting with a
@@ -121,16 +136,7 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
         return Columns()
     commented = header.startswith(("//", "#"))  # a comment names columns only when it names x, y, z
     parsed = [_name_and_unit(n) for n in names]
-    axes = {}
-    for i, (n, _) in enumerate(parsed):
-        m = _COORDINATE.match(n)
-        axis = m.group("axis") if m else SURVEY_AXES.get(n)
-        if axis and axis not in axes:
-            axes[axis] = i
-    named = {n for n, _ in parsed}
-    if not axes and SHORT_SURVEY_NAMES[0] <= named and SHORT_SURVEY_NAMES[1] & named:
-        short = {n: i for i, (n, _) in reversed(list(enumerate(parsed)))}  # each name's first column
-        axes = {"x": short["e"], "y": short["n"], "z": min(short[n] for n in SHORT_SURVEY_NAMES[1] if n in short)}
+    axes = _axes([n for n, _ in parsed])
     plain = [n for n, _ in parsed]
     nominal = sorted(NOMINAL_NAMES & set(plain))
     if commented and (nominal or len(axes) < 3):
@@ -204,6 +210,83 @@ def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
     return replace(cols, unit=unit, stated_by=f"its comment on line {lineno}: {text!r}")
 
 
+HEADER_LINES_LOOKED_AT = 100  # a header stands within the file's first lines
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def _header_delimiter(line: str) -> str | None:
+    """What separates a header's names (:func:`_header_names`): a comma, semicolon or tab, else blanks (None)."""
+    return next((d for d in (",", ";", "\t") if d in line), None)
+
+
+def _split_at(line: str, delimiter: str | None) -> list[str]:
+    return [c.strip() for c in line.split(delimiter)] if delimiter else line.split()
+
+
+def _without_text_columns(lines: list[str], log: ReadLog) -> list[str]:
+    """The lines without the cells of columns that hold text (a point's name: ``Point,X,Y,Z`` over ``P12,...``,
+    ``name x y z``) when a header names x, y and z and the first row under it holds numbers in those columns, with
+    a warning naming the columns left out. A line of text under a header was taken for more header, and the file
+    was refused as holding no readable rows. Other files are returned as they are."""
+    header_at = None
+    looked_at = 0
+    for at, line in enumerate(lines):
+        s = line.strip()
+        if not s or s[0] in "#%" or (s[0] == "/" and not s.startswith("//")):
+            continue
+        looked_at += 1
+        if looked_at > HEADER_LINES_LOOKED_AT or all(_is_number(f) for f in _SPLIT.split(s.lstrip("/")) if f):
+            return lines  # the rows start, or no header was found: no text column
+        if header_at is not None:
+            text = _text_columns(lines[header_at], s)
+            if text:
+                return _cells_left_out(lines, header_at, at, text, log)
+        header_at = at
+    return lines
+
+
+def _text_columns(header: str, row: str) -> list[int]:
+    """The columns of ``row`` that hold text where ``header`` names x, y, z and ``row`` holds numbers in those
+    (none when it does not)."""
+    names = _header_names(header)
+    cells = _split_at(row, _header_delimiter(header.strip().lstrip("/#").strip()))
+    axes = _axes([_name_and_unit(n)[0] for n in names])
+    if len(cells) != len(names) or len(axes) < 3 or not all(_is_number(cells[i]) for i in axes.values()):
+        return []
+    return [k for k, c in enumerate(cells) if k not in axes.values() and not _is_number(c)]
+
+
+def _cells_left_out(lines: list[str], header_at: int, first_row: int, text: list[int], log: ReadLog) -> list[str]:
+    """``lines`` with the cells of the columns ``text`` left out of the header (at ``header_at``) and of every row
+    as wide as it, and the warning that says so."""
+    header = lines[header_at].strip()
+    prefix = header[:len(header) - len(header.lstrip("/#"))]
+    names = _header_names(header)
+    delimiter = _header_delimiter(header.lstrip("/#").strip())
+    joint = delimiter or " "
+    out = list(lines)
+    out[header_at] = prefix + joint.join(n for k, n in enumerate(names) if k not in text)
+    for at in range(header_at + 1, len(lines)):
+        cells = _split_at(lines[at].strip(), delimiter)
+        if len(cells) == len(names):
+            out[at] = joint.join(c for k, c in enumerate(cells) if k not in text)
+    left_out = [names[k] for k in text]
+    example = _split_at(lines[first_row].strip(), delimiter)[text[0]]
+    log.warn(Diagnostic(code="text_column_skipped", message=(
+        f"the column{'s' if len(text) > 1 else ''} {', '.join(repr(n) for n in left_out)} of the header on line "
+        f"{header_at + 1} hold{'' if len(text) > 1 else 's'} text (line {first_row + 1}: {example!r}), not "
+        "coordinates: left out, x, y, z read from the columns the header names so."),
+        details={"columns": left_out, "header_line": header_at + 1}))
+    return out
+
+
 def _first_row(lines: list[str]) -> tuple[str | None, int, int]:
     """The last header line before the first row of numbers, its line number, and that row's width."""
     header, header_line = None, 0
@@ -274,8 +357,12 @@ def _whole_then_decimals(lines: list[str]) -> bool:
     three with decimals, in every row looked at: an attribute written before x, y, z by a file without a header (an
     intensity, a class, a point number that does not count the rows). A writer prints a scan's three coordinates
     alike; read as x, the attribute made the tube of an intensity, x and y (a straight of 4,095 mm with status
-    ok). Not where the first column runs up (x sampled a unit apart, a profile scanner's steps) or the fourth is
-    constant (an attribute after x, y, z: no point of a tube's surface shares a coordinate with its neighbours)."""
+    ok). Not where the first column runs up or is held over runs of rows (x sampled a unit apart, a profile
+    scanner's steps, up or down), where the fourth is constant (an attribute after x, y, z: no point of a tube's
+    surface shares a coordinate with its neighbours), where the next three are not written alike (the same
+    number of decimals, most often): then the fourth is an attribute after y and z, nor where the next three are
+    flat (:data:`FLAT`) and the first three not (a reflectance of 0 to 1 after y and z, read as z, made a tube of
+    no thickness; a long straight tube is flat either way)."""
     rows = []
     for line in lines:
         s = line.strip()
@@ -290,7 +377,21 @@ def _whole_then_decimals(lines: list[str]) -> bool:
         return False
     first = np.array([float(r[0]) for r in rows])
     fourth = np.array([float(r[3]) for r in rows])
-    return bool(np.any(np.diff(first) < 0)) and bool(np.ptp(fourth) > 0)
+    held = float(np.mean(np.diff(first) == 0))
+    written = {Counter(cell_decimals(r[k]) for r in rows).most_common(1)[0][0] for k in (1, 2, 3)}
+    values = np.array([[float(c) for c in r[:4]] for r in rows])
+    return (bool(np.any(np.diff(first) < 0)) and held < 0.5 and bool(np.ptp(fourth) > 0) and len(written) == 1
+            and not (_flat(values[:, 1:4]) and not _flat(values[:, :3])))
+
+
+# A scan whose smallest extent is less than this share of its largest is flat: no tube of a length under a hundred
+# diameters (a reflectance of 0 to 1 beside coordinates of a hundred millimetres is)
+FLAT = 0.01
+
+
+def _flat(xyz: np.ndarray) -> bool:
+    extent = np.ptp(xyz, axis=0)
+    return bool(extent.min() < FLAT * extent.max())
 
 
 def _number_rows(lines: list[str]) -> list[str]:
@@ -364,7 +465,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
         text = decode_text(content, "point list")
     except InputRejected as e:
         raise reject(f"the file is not text in UTF-8, UTF-16 or Windows-1252: {e.errors[0].msg}") from None
-    lines, unreadable = _plain_rows(text.splitlines())
+    lines, unreadable = _plain_rows(_without_text_columns(text.splitlines(), log))
     counts = _pts_counts(lines)
     for lineno in counts:
         lines[lineno - 1] = ""

@@ -46,3 +46,26 @@ def test_x_written_as_whole_numbers_with_y_z_and_a_varying_fourth_column_in_deci
     points, warned = _read(text)
     np.testing.assert_allclose(points[:, 0], x)
     assert "first_column_skipped" not in warned
+
+
+def test_x_stepped_down_in_whole_numbers_stays_x():
+    # review: a profile scanner moving along -x (x held for each profile's rows, then a step down): x fell between
+    # rows, and it was left out as an attribute (the tube read from y, z and a reflectance)
+    x = np.repeat(np.arange(199, -1, -1), 5)
+    a = RNG.uniform(0.0, 2.0 * np.pi, len(x))
+    text = "".join(f"{v} {12.5 * np.cos(t):.3f} {12.5 * np.sin(t):.3f} {r:.3f}\n"
+                   for v, t, r in zip(x, a, RNG.uniform(0.2, 0.9, len(x))))
+    points, warned = _read(text)
+    np.testing.assert_allclose(points[:, 0], x)
+    assert "first_column_skipped" not in warned
+
+
+@pytest.mark.parametrize("written", ["2f", "3f"])
+def test_whole_x_before_y_z_and_a_reflectance_stays_x(written):
+    # review: x y z and a reflectance, x written as whole numbers, y and z to 0.001: the reflectance to 0.01 is not
+    # written as y and z are; to 0.001 it is, but read as z it made a tube of no thickness (0 to 1 mm)
+    values = RNG.uniform(0.0, 1.0, len(POINTS))
+    text = "".join(f"{round(x)} {y:.3f} {z:.3f} {r:{written}}\n" for r, (x, y, z) in zip(values, POINTS))
+    points, warned = _read(text)
+    np.testing.assert_allclose(points, np.c_[np.round(POINTS[:, 0]), POINTS[:, 1:]], atol=5e-4)
+    assert "first_column_skipped" not in warned
