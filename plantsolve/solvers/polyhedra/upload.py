@@ -810,10 +810,16 @@ def parse_stl(content: bytes) -> dict:
 
 
 def _another_format(content: bytes) -> bool:
-    """Whether the file's first bytes are those of a format :func:`file_holds` knows by its signature alone (a binary
-    STL's 80-byte header is free text, so only signatures, not a guess from its lines, tell it apart)."""
+    """Whether the file is of a format :func:`file_holds` knows by a signature no binary STL has. Its 80-byte header
+    is free text ('plywood shelf', '{part 7}', '<Part1>'), so a header's first word is not enough: a zip's magic
+    bytes, a PLY's 'ply' line followed by its 'format' line, or a STEP, XML or JSON start followed by text, where a
+    binary STL's triangles hold NULs (their 2-byte attribute, 0 in nearly every file)."""
     holds = file_holds(content[:65536]) or ""
-    return holds.startswith(("a PLY", "an IFC", "a STEP", "a zip", "a gbXML", "an XML", "a JSON"))
+    if holds.startswith("a zip"):
+        return True
+    if holds.startswith("a PLY"):
+        return re.match(rb"ply\r?\nformat ", content.lstrip(b"\xef\xbb\xbf \r\n\t")) is not None
+    return holds.startswith(("an IFC", "a STEP", "a gbXML", "an XML", "a JSON")) and b"\x00" not in content[84:4096]
 
 
 def _read_stl(content: bytes) -> dict:

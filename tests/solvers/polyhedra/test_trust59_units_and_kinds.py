@@ -78,9 +78,19 @@ def test_a_ply_scan_named_stl_is_refused_naming_ply():
     assert error.loc == ("file",) and "PLY" in error.msg
 
 
-def test_a_binary_stl_cut_short_is_still_read_with_its_whole_triangles():
-    result = solved("room.stl", box_stl(5, 4, 3)[:-25])
-    assert "truncated_file" in codes(result)
+@pytest.mark.parametrize("header", [b"", b"plywood shelf", b"ply", b"{part 7}", b"<Part1>", b"[mesh]"])
+def test_a_binary_stl_cut_short_is_still_read_with_its_whole_triangles(header):
+    # a header is free text: its first word ('ply', '{') is no other format's signature (they were refused)
+    room = box_stl(5, 4, 3)
+    cut = (header.ljust(80, b" ") if header else room[:80]) + room[80:-25]
+    result = solved("room.stl", cut)
+    assert "truncated_file" in codes(result) and result.report.details["source"]["faces"] == 11
+
+
+def test_a_ply_written_in_text_after_its_binary_header_word_is_still_refused():
+    ply = b"ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nend_header\r\n" + bytes(range(256)) * 4
+    with pytest.raises(InputRejected):
+        parse_upload(StoredInput.from_bytes("room.stl", ply), None)
 
 
 def test_a_closed_zone_of_no_volume_is_named():
