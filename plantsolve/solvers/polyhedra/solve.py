@@ -368,6 +368,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     warnings.extend(implausible(zones, measured, request.units, hint, read_as(request)))
     if not any(w.code == "implausible_zone_height" for w in warnings):  # a height out of range says it already
         warnings.extend(building_too_low(measured, request.units, hint, read_as(request)))
+    if not any(w.code.startswith("implausible_") for w in warnings):  # a zone out of its range names the unit
         warnings.extend(zones_all_too_tall(measured, request.units, hint, read_as(request)))
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)

@@ -64,6 +64,28 @@ def test_a_room_in_metres_and_a_hall_beside_rooms_are_not_named():
     assert not {c for c in codes(hall) if c.startswith("implausible")}
 
 
+def test_a_tower_or_an_atrium_drawn_as_one_zone_is_no_room_in_inches():
+    # taller than wide: no room's shape (a 60 m tower in metres was named 'inches read as metres')
+    for tower in (box_stl(30, 30, 60), box_stl(20, 12, 150)):
+        assert not {c for c in codes(solved("tower.stl", tower)) if c.startswith("implausible")}
+
+
+def test_a_hall_wider_than_high_is_named_saying_what_it_would_have_to_be():
+    (warning,) = [w for w in solved("hall.stl", box_stl(250, 200, 100)).report.warnings
+                  if w.code == "implausible_lowest_zone_height"]
+    assert "stadium" in warning.message and warning.details["likely_file_unit"] == "in"
+    assert "2.54 m" in warning.message  # 100 in, a storey's height
+    # 60 m read as inches is 1.52 m, as feet 18 m: neither a storey's, and no unit is named ('60 ft' was, as one)
+    (low,) = [w for w in solved("hall.stl", box_stl(200, 150, 60)).report.warnings
+              if w.code == "implausible_lowest_zone_height"]
+    assert low.details["likely_file_unit"] is None
+
+
+def test_a_large_room_in_inches_is_named_once_by_its_volume():
+    result = solved("room.stl", box_stl(10 / INCH, 8 / INCH, 3.5 / INCH))
+    assert "implausible_zone_volume" in codes(result) and "implausible_lowest_zone_height" not in codes(result)
+
+
 def test_obj_rooms_in_inches_without_a_header_are_named_with_inches():
     result = solved("rooms.obj", two_rooms_obj(1 / INCH))
     (warning,) = [w for w in result.report.warnings if w.code == "implausible_lowest_zone_height"]
