@@ -33,6 +33,7 @@ RANGES = (
     Range("implausible_zone_height", "height", 1, 0.1, 300.0, 3.0),
     Range("implausible_zone_extent", "horizontal extent", 1, 0.1, 3000.0, 10.0),
 )
+ZONE_RANGE_CODES = frozenset(rng.code for rng in RANGES)
 SUPERSCRIPT = {1: "", 2: "²", 3: "³"}
 # a building's tallest zone: a plenum or a crawlspace may be 0.5 m high, but a building of several zones none of which
 # a person stands in is feet (or inches) read as metres, which gives rooms of plausible volume one by one

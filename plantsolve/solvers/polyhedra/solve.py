@@ -20,15 +20,16 @@ from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
 from plantsolve.solvers.polyhedra.closure_verdict import volumes_not_determined
-from plantsolve.solvers.polyhedra.counted import floor_areas_left_out, multipliers_applied, subsurface_copies, \
-    subsurface_multipliers_applied
+from plantsolve.solvers.polyhedra.counted import floor_areas_left_out, implausible_multipliers, multipliers_applied, \
+    subsurface_copies, subsurface_multipliers_applied
 from plantsolve.solvers.polyhedra.declared import compare
 from plantsolve.solvers.polyhedra.duplicates import repeated_faces
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
 from plantsolve.solvers.polyhedra.file_units import METRES
-from plantsolve.solvers.polyhedra.plausibility import building_too_low, implausible, zones_all_too_tall
+from plantsolve.solvers.polyhedra.plausibility import ZONE_RANGE_CODES, building_too_low, implausible, \
+    zones_all_too_tall
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
 from plantsolve.solvers.polyhedra.subsurfaces import subsurface_warnings
@@ -359,6 +360,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             if differ:
                 warnings.append(differ)
     warnings.extend(multipliers_applied(zones))
+    warnings.extend(implausible_multipliers(zones, request.units))
     warnings.extend(floor_areas_left_out(zones, request.units))
     warnings.extend(subsurface_multipliers_applied(request, poly, area))
     sizes = zone_sizes(poly, gmap, n_zones)
@@ -368,7 +370,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     warnings.extend(implausible(zones, measured, request.units, hint, read_as(request)))
     if not any(w.code == "implausible_zone_height" for w in warnings):  # a height out of range says it already
         warnings.extend(building_too_low(measured, request.units, hint, read_as(request)))
-    if not any(w.code.startswith("implausible_") for w in warnings):  # a zone out of its range names the unit
+    if not any(w.code in ZONE_RANGE_CODES for w in warnings):  # a zone out of its range names the unit already
         warnings.extend(zones_all_too_tall(measured, request.units, hint, read_as(request)))
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)
