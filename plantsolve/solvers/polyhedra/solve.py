@@ -19,7 +19,7 @@ from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
-from plantsolve.solvers.polyhedra.closure_verdict import volumes_not_determined
+from plantsolve.solvers.polyhedra.closure_verdict import totals_not_determined, volumes_not_determined
 from plantsolve.solvers.polyhedra.counted import floor_areas_left_out, implausible_multipliers, multipliers_applied, \
     subsurface_copies, subsurface_multipliers_applied
 from plantsolve.solvers.polyhedra.declared import compare
@@ -376,18 +376,28 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")
     closed_count = sum(1 for z in zones if z["volume"] is not None)
+    partial = totals_not_determined(request.source)
     verdict = volumes_not_determined(zones, warnings)
-    if verdict is not None:  # the gravest first: Report.verdict is the first verdict among the warnings
-        warnings.insert(0, verdict)
+    # the gravest first: Report.verdict is the first verdict among the warnings
+    warnings[:0] = [v for v in (verdict, partial) if v is not None]
     return Solved(PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, faces_listed=listed, faces_in_csv=tabled,
         edge_length_total=edge_length_total,
         adjacency=adjacent, total_volume=total if all_closed else None,
         total_floor_area=float((floors * [z["multiplier"] * z["part_of_total_floor_area"] for z in zones]).sum()),
         report=Report(status="warning" if warnings else "ok",
-                      message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
+                      message=f"{closed_count} of {n_zones} zone(s) closed" + (_cut_short(partial) if partial else ""),
+                      warnings=warnings, details=details),
     ), files={FACE_TABLE: _npy(area, net_area, an.measures.perimeter, normal, planarity)}
         if tabled else {})
+
+
+def _cut_short(partial: Diagnostic) -> str:
+    """The summary's word on a file cut short: what it names against what was read."""
+    said = partial.details
+    past = f" and {said['objects_past_cut']} object(s) past the cut" if said["objects_past_cut"] else ""
+    return (f"; the file was cut short: it names {said['spaces_named']} space(s){past}, the totals are those of the "
+            f"{said['spaces_measured']} read")
 
 
 def _npy(*columns: np.ndarray) -> bytes:
