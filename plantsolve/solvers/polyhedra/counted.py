@@ -38,9 +38,10 @@ def implausible_multipliers(zones: list[dict], units: str) -> list[Diagnostic]:
     """``implausible_zone_multiplier`` naming the zones whose multiplier no building has (above :data:`MAX_COPIES`,
     or copies together above the largest buildings' volume or floor area), and what they add to the totals."""
     k = METRES[units]
-    found = [z for z in zones if z["multiplier"] > MAX_COPIES
-             or (z["volume"] or 0.0) * z["multiplier"] * k ** 3 > MAX_COPIES_VOLUME
-             or z["floor_area"] * z["multiplier"] * k ** 2 > MAX_COPIES_FLOOR_AREA]
+    # a zone counted once is no multiplier's doing (a zone too large alone is implausible_zone_volume's)
+    found = [z for z in zones if z["multiplier"] > 1 and (
+        z["multiplier"] > MAX_COPIES or (z["volume"] or 0.0) * z["multiplier"] * k ** 3 > MAX_COPIES_VOLUME
+        or z["floor_area"] * z["multiplier"] * k ** 2 > MAX_COPIES_FLOOR_AREA)]
     if not found:
         return []
     listed = ", ".join(f"{z['id']!r} ×{z['multiplier']:,} ({(z['volume'] or 0.0) * z['multiplier']:.3g} {units}³, "

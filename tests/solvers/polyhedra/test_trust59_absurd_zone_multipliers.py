@@ -62,6 +62,12 @@ def test_copies_larger_together_than_the_largest_buildings_are_named_in_the_requ
         "copies_volume_maximum"] == pytest.approx(3e7 / 0.3048 ** 3)
 
 
+def test_a_zone_too_large_alone_and_counted_once_is_no_multipliers_doing():
+    # a 400 x 400 x 300 m 'room' (cm read as m): 4.8e7 m³, implausible_zone_volume's to name, not a multiplier's
+    result = solved(json.dumps(box_request(400, 300, 1, "m")), "request.json")
+    assert not multiplier_warnings(result) and "implausible_zone_volume" in {w.code for w in result.report.warnings}
+
+
 def test_a_real_buildings_multipliers_say_nothing():
     # EnergyPlus' MultiStory pattern: a middle zone for 4, a middle floor's ZoneGroup for 8 (32 copies)
     for value in ("8", "32", "600"):
