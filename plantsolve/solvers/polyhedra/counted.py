@@ -34,18 +34,21 @@ def multipliers_applied(zones: list[dict]) -> list[Diagnostic]:
         details={"zones": {z["id"]: z["multiplier"] for z in repeated[:100]}})]
 
 
-def implausible_multipliers(zones: list[dict], units: str) -> list[Diagnostic]:
+def implausible_multipliers(zones: list[dict], units: str, source: dict | None) -> list[Diagnostic]:
     """``implausible_zone_multiplier`` naming the zones whose multiplier no building has (above :data:`MAX_COPIES`,
-    or copies together above the largest buildings' volume or floor area), and what they add to the totals."""
+    or copies together above the largest buildings' volume or floor area), their ``Zone`` objects' lines (the IDF
+    reader's ``source.multiplied_zone_lines``) and what they add to the totals."""
     k = METRES[units]
+    lines = (source or {}).get("multiplied_zone_lines") or {}
     # a zone counted once is no multiplier's doing (a zone too large alone is implausible_zone_volume's)
     found = [z for z in zones if z["multiplier"] > 1 and (
         z["multiplier"] > MAX_COPIES or (z["volume"] or 0.0) * z["multiplier"] * k ** 3 > MAX_COPIES_VOLUME
         or z["floor_area"] * z["multiplier"] * k ** 2 > MAX_COPIES_FLOOR_AREA)]
     if not found:
         return []
-    listed = ", ".join(f"{z['id']!r} ×{z['multiplier']:,} ({(z['volume'] or 0.0) * z['multiplier']:.3g} {units}³, "
-                       f"{z['floor_area'] * z['multiplier']:.3g} {units}² of floor)" for z in found[:10])
+    at = {z["id"]: f" (its Zone at line {lines[z['id']]})" if lines.get(z["id"]) else "" for z in found}
+    listed = ", ".join(f"{z['id']!r}{at[z['id']]} ×{z['multiplier']:,} ({(z['volume'] or 0.0) * z['multiplier']:.3g} "
+                       f"{units}³, {z['floor_area'] * z['multiplier']:.3g} {units}² of floor)" for z in found[:10])
     added = sum((z["volume"] or 0.0) * (z["multiplier"] - 1) for z in found)
     return [Diagnostic(code="implausible_zone_multiplier", message=(
         f"{len(found)} zone multiplier(s) (Zone Multiplier times its ZoneGroup's) no building has: {listed}"
@@ -57,7 +60,8 @@ def implausible_multipliers(zones: list[dict], units: str) -> list[Diagnostic]:
         details={"quantity": "zone multiplier", "units": units, "plausible_maximum": MAX_COPIES,
                  "copies_volume_maximum": MAX_COPIES_VOLUME / k ** 3,
                  "copies_floor_area_maximum": MAX_COPIES_FLOOR_AREA / k ** 2,
-                 "zones": {z["id"]: z["multiplier"] for z in found[:100]}, "volume_added": added,
+                 "zones": {z["id"]: z["multiplier"] for z in found[:100]},
+                 "lines": [lines.get(z["id"]) for z in found[:100]], "volume_added": added,
                  "count": len(found)})]
 
 

@@ -360,7 +360,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             if differ:
                 warnings.append(differ)
     warnings.extend(multipliers_applied(zones))
-    warnings.extend(implausible_multipliers(zones, request.units))
+    warnings.extend(implausible_multipliers(zones, request.units, request.source))
     warnings.extend(floor_areas_left_out(zones, request.units))
     warnings.extend(subsurface_multipliers_applied(request, poly, area))
     sizes = zone_sizes(poly, gmap, n_zones)

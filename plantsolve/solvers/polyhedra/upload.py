@@ -468,7 +468,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                                         if k in used_zones]))
     warnings.extend(_zones_without_surfaces([(zone_names[k], zone_line[k]) for k in zone_names if k not in used_zones],
                                             len(used_zones)))
-    multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
+    multiplied = {k: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
+    multipliers = {zone_names[k]: m for k, m in multiplied.items()}
     warnings.extend(w.model_dump() for w in zone_list_strays(objects, zone_names))
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
@@ -481,7 +482,9 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                        "declared": {zone_names.get(k.lower(), k): v for k, v in declared.items()
                                     if k.lower() in used_zones},
                        "skipped": skipped[:MAX_SKIPPED_LISTED],
-                       "skipped_count": len(skipped), "warnings": warnings}}
+                       "skipped_count": len(skipped),
+                       **({"multiplied_zone_lines": {zone_names[k]: zone_line[k] for k in multiplied}}
+                          if multiplied else {}), "warnings": warnings}}
 
 
 def _zones_not_defined(undefined: list[tuple[str, int]]) -> list[Diagnostic]:

@@ -38,6 +38,8 @@ def test_a_multiplier_no_building_has_is_named_with_what_it_adds(value):
     (warning,) = multiplier_warnings(result)
     assert warning.details["zones"] == {"Office A Thermal Zone": int(value)}
     assert warning.details["volume_added"] == pytest.approx(60.0 * (int(value) - 1))
+    line = OFFICES[:OFFICES.index("Office A Thermal Zone,")].count("\n")  # its "Zone," line, above the name
+    assert warning.details["lines"] == [line] and f"line {line}" in warning.message
     assert "Multiplier field" in warning.message and "zone_multipliers_applied" in {
         w.code for w in result.report.warnings}
 
@@ -79,7 +81,7 @@ def test_the_epjson_reader_names_it_too():
     zone = next(iter(epjson["Zone"].values()))
     zone["multiplier"] = 1000000
     (warning,) = multiplier_warnings(solved(json.dumps(epjson), "offices.epJSON"))
-    assert list(warning.details["zones"].values()) == [1000000]
+    assert list(warning.details["zones"].values()) == [1000000] and "line" not in warning.message.split("×")[0]
 
 
 @pytest.mark.parametrize("value", ["0", "-3", "2.5"])
