@@ -61,7 +61,7 @@ def test_a_missing_sub_model_is_said_by_its_own_verdict_not_counted_as_unread():
 
 def test_a_sub_model_placed_by_a_scaling_matrix_counts_every_part_it_holds():
     # its one line placed six bricks: counted as one, the two bricks read were 'rigid: true' for a model of eight
-    text = ("0 FILE main.ldr\n" + brick(0) + brick(-24) + f"1 16 0 -48 0 2 0 0 0 2 0 0 0 2 tower.ldr\n"
+    text = ("0 FILE main.ldr\n" + brick(0) + brick(-24) + "1 16 0 -48 0 2 0 0 0 2 0 0 0 2 tower.ldr\n"
             + "0 FILE tower.ldr\n" + "".join(brick(-24 * k) for k in range(5)) + f"1 16 0 -120 0 {IDENTITY} top.ldr\n"
             + "0 FILE top.ldr\n" + brick(0) + "1 16 0 0 0 1 0 0 0 1 0 0 0 1 stud.dat\n")
     request, result = solved(text, "model.mpd")
