@@ -69,3 +69,4 @@ def test_a_sub_model_placed_by_a_scaling_matrix_counts_every_part_it_holds():
     assert result.rigid is None and codes(result)[0] == "rigidity_not_determined"
     (verdict,) = [w for w in result.report.warnings if w.code == "rigidity_not_determined"]
     assert verdict.details["placements_not_read"] == 6 and verdict.details["unknown_share"] == pytest.approx(0.75)
+    assert "6 part(s) placed by lines that could not be read" in verdict.message
