@@ -219,6 +219,7 @@ VERDICT_CODES: dict[str, str] = {
     "inspection_not_determined": "NOT DETERMINED",
     "inspection_not_comparable": "NOT COMPARABLE",
     "volume_not_determined": "NOT DETERMINED",
+    "totals_not_determined": "NOT DETERMINED",
     "rigidity_not_determined": "NOT DETERMINED",
     "one_piece_not_determined": "NOT DETERMINED",
     "submodels_missing": "NOT DETERMINED",
@@ -228,7 +229,7 @@ VERDICT_CODES: dict[str, str] = {
 }
 """The warning codes that are a verdict against a result, each with its headline. Most warnings are caveats on an
 answer that stands (a file's unit converted, a fit less close); these say the answer is *no* or *not known*: a tube
-out of tolerance or not measurable against its nominal, a zone whose volume is not known, a fit stopped before it converged, an optimized model that
+out of tolerance or not measurable against its nominal, a zone whose volume is not known (or totals of a file cut short: not the building's), a fit stopped before it converged, an optimized model that
 failed its own verification, an accuracy asked for and not reached, a LEGO model mostly of parts not in the catalogue,
 one that comes apart as analysed (loose as drawn or held by joints the catalogue lacks: not known which), or one that
 places sub-models its file does not hold."""

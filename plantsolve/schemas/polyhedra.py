@@ -294,9 +294,12 @@ class PolyhedraResult(BaseModel):
                                      json_schema_extra=unit(LENGTH))
     adjacency: list[Adjacency]
     total_volume: float | None = Field(description="Sum of the zones' volumes (units³), each times its multiplier; "
-                                       "null when a zone is not closed.", json_schema_extra=unit(VOLUME))
+                                       "null when a zone is not closed. Of a file cut short (an IFC cut "
+                                       "mid-entity), those of the zones read: the report's verdict "
+                                       "totals_not_determined says they are not the building's.",
+                                       json_schema_extra=unit(VOLUME))
     total_floor_area: float = Field(description="Sum of the floor areas (units²) of the zones that are "
                                     "part_of_total_floor_area, each times its multiplier (EnergyPlus' total floor "
-                                    "area).",
+                                    "area); of a file cut short, those of the zones read (totals_not_determined).",
                                     json_schema_extra=unit(AREA))
     report: Report

@@ -9,7 +9,16 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import PolyhedraRequest
+from plantsolve.solvers.polyhedra.file_units import METRES
 from plantsolve.solvers.polyhedra.polygons import Polygons
+
+# EnergyPlus takes any whole Zone Multiplier from 1 (its IDD sets no maximum), but a multiplier counts identical zones:
+# more of them than the largest hotels have rooms (some 7,000), or copies of one zone that together outgrow the
+# largest buildings (Boeing's Everett plant, 1.3e7 m³; 1.7e6 m² of floor), is a typing slip (10 typed 1000000) or
+# another field shifted into the Multiplier's place, not a building
+MAX_COPIES = 10_000
+MAX_COPIES_VOLUME = 3e7  # m³
+MAX_COPIES_FLOOR_AREA = 3e6  # m²
 
 
 def multipliers_applied(zones: list[dict]) -> list[Diagnostic]:
@@ -23,6 +32,37 @@ def multipliers_applied(zones: list[dict]) -> list[Diagnostic]:
         "total_volume and total_floor_area count each that many times, as EnergyPlus counts floor area; the zones' "
         "own measures are one copy's."),
         details={"zones": {z["id"]: z["multiplier"] for z in repeated[:100]}})]
+
+
+def implausible_multipliers(zones: list[dict], units: str, source: dict | None) -> list[Diagnostic]:
+    """``implausible_zone_multiplier`` naming the zones whose multiplier no building has (above :data:`MAX_COPIES`,
+    or copies together above the largest buildings' volume or floor area), their ``Zone`` objects' lines (the IDF
+    reader's ``source.multiplied_zone_lines``) and what they add to the totals."""
+    k = METRES[units]
+    lines = (source or {}).get("multiplied_zone_lines") or {}
+    # a zone counted once is no multiplier's doing (a zone too large alone is implausible_zone_volume's)
+    found = [z for z in zones if z["multiplier"] > 1 and (
+        z["multiplier"] > MAX_COPIES or (z["volume"] or 0.0) * z["multiplier"] * k ** 3 > MAX_COPIES_VOLUME
+        or z["floor_area"] * z["multiplier"] * k ** 2 > MAX_COPIES_FLOOR_AREA)]
+    if not found:
+        return []
+    at = {z["id"]: f" (its Zone at line {lines[z['id']]})" if lines.get(z["id"]) else "" for z in found}
+    listed = ", ".join(f"{z['id']!r}{at[z['id']]} ×{z['multiplier']:,} ({(z['volume'] or 0.0) * z['multiplier']:.3g} "
+                       f"{units}³, {z['floor_area'] * z['multiplier']:.3g} {units}² of floor)" for z in found[:10])
+    added = sum((z["volume"] or 0.0) * (z["multiplier"] - 1) for z in found)
+    return [Diagnostic(code="implausible_zone_multiplier", message=(
+        f"{len(found)} zone multiplier(s) (Zone Multiplier times its ZoneGroup's) no building has: {listed}"
+        f"{' …' if len(found) > 10 else ''}. A multiplier counts identical zones: at most {MAX_COPIES:,} of them, "
+        f"whose copies together stay within the largest buildings' {MAX_COPIES_VOLUME / k ** 3:.3g} {units}³ and "
+        f"{MAX_COPIES_FLOOR_AREA / k ** 2:.3g} {units}² of floor. Their copies add {added:.4g} {units}³ to "
+        "total_volume and their floors to total_floor_area: check the Zone's Multiplier field (a typing slip, or "
+        "another field shifted into its place) and its ZoneGroup's Zone List Multiplier."),
+        details={"quantity": "zone multiplier", "units": units, "plausible_maximum": MAX_COPIES,
+                 "copies_volume_maximum": MAX_COPIES_VOLUME / k ** 3,
+                 "copies_floor_area_maximum": MAX_COPIES_FLOOR_AREA / k ** 2,
+                 "zones": {z["id"]: z["multiplier"] for z in found[:100]},
+                 "lines": [lines.get(z["id"]) for z in found[:100]], "volume_added": added,
+                 "count": len(found)})]
 
 
 def subsurface_copies(request: PolyhedraRequest, n_faces: int) -> np.ndarray:

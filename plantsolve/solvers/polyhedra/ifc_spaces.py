@@ -28,6 +28,7 @@ from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.ifc_units import project_length_scale
 from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
+from plantsolve.solvers.polyhedra.ifc_cut import aggregated_past_cut
 from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out, lines_of_another_schema
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, blank_strings_and_comments, line_ends, where_cut
@@ -102,9 +103,9 @@ def parse_ifc(content: bytes) -> dict:
     project_length_scale(model, VOLUMES_DEPEND)  # before the kernel reads the geometry in one of two units
     warnings = []
     cut = where_cut(text[-TRAILER_BYTES:].encode("latin-1", errors="replace"))
+    cut_line = line_ends(text, 0, len(text.rstrip())) + 1 if cut is not None else None
     if cut is not None:  # the spaces read are whole; those after the cut, and relations written last, are not
-        line = line_ends(text, 0, len(text.rstrip())) + 1
-        warnings.append(truncated_file(line, f"the file does not end with 'END-ISO-10303-21;' ({cut}): it was cut "
+        warnings.append(truncated_file(cut_line, f"the file does not end with 'END-ISO-10303-21;' ({cut}): it was cut "
                                        "in transfer or export. The spaces, quantities and relations after the cut "
                                        "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
     was_cut = f" (the file was cut short: {cut})" if cut else ""
@@ -200,10 +201,18 @@ def parse_ifc(content: bytes) -> dict:
     length_name = ifcopenshell.util.unit.get_full_unit_name(length) if length is not None else "none assigned: metres"
     spaces_listed = {zone_of[s.id()]: {"global_id": s.GlobalId, "name": s.Name, "long_name": s.LongName}
                      for s in spaces if s.id() in shaped}
+    # a DATA section cut open: the totals are those of the spaces read, not the building's (a file missing only its
+    # trailer after 'ENDSEC;' holds every instance)
+    read_to_cut = {"read_to_cut": {
+        "format": "IFC", "line": cut_line, "spaces_named": len(spaces), "spaces_measured": len(shaped),
+        "spaces_not_measured": [label[s.id()] for s in spaces if s.id() not in shaped][:MAX_SKIPPED_LISTED],
+        "objects_past_cut": aggregated_past_cut(blanked, model)}} if cut and not blanked.rstrip().endswith(
+        "ENDSEC;") else {}
     return {"units": "m", "vertices": np.concatenate(vertices).tolist(), "faces": faces,
             "source": {"format": "ifc", "schema": model.schema,
                        "units": stated(symbol(length_scale), length_scale,
                                        "IfcUnitAssignment" if length is not None else NONE_ASSIGNED,
                                        f"the IFC project's length unit, {length_name}"), "faces": len(faces), "zones": len(shaped),
                        "spaces": spaces_listed, "declared": declared, "declared_quantities": quantities_used,
-                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}
+                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), **read_to_cut,
+                       "warnings": warnings}}

@@ -33,14 +33,19 @@ RANGES = (
     Range("implausible_zone_height", "height", 1, 0.1, 300.0, 3.0),
     Range("implausible_zone_extent", "horizontal extent", 1, 0.1, 3000.0, 10.0),
 )
+ZONE_RANGE_CODES = frozenset(rng.code for rng in RANGES)
 SUPERSCRIPT = {1: "", 2: "²", 3: "³"}
 # a building's tallest zone: a plenum or a crawlspace may be 0.5 m high, but a building of several zones none of which
 # a person stands in is feet (or inches) read as metres, which gives rooms of plausible volume one by one
 TALLEST = Range("implausible_building_height", "tallest zone's height", 1, 1.8, 1000.0, 3.0)
-# and the other way: a model whose every zone stands over 50 m high (a hangar's or a nave's height, each alone) is
-# inches read as metres, the unit an STL or an OBJ without a header leaves to the request: 2.4-4 m rooms read as
-# 94-157 m ones, each under the single zone's 300 m and 1e7 m³
+# and the other way: a model whose every zone stands over 50 m high, each at least as wide as it is high, is rooms
+# in inches read as metres, the unit an STL or an OBJ without a header leaves to the request: 2.4-4 m rooms read as
+# 94-157 m ones, each under the single zone's 300 m and 1e7 m³. A zone taller than wide (a tower or an atrium drawn as
+# one zone, a shaft, a silo) is not a room's shape, and is not named; a hall wider than high (a hangar, a stadium) is,
+# the message saying what it would have to be
 LOWEST = Range("implausible_lowest_zone_height", "lowest zone's height", 1, 1.8, 50.0, 3.0)
+# the unit named for it brings the lowest zone to a storey's height (a tall ground floor's at most)
+STOREY = Range(LOWEST.code, LOWEST.quantity, 1, 1.8, 10.0, 3.0)
 
 
 def _mix_up(value_si: float, rng: Range, read_as: tuple[str, float]) -> tuple[str, float] | None:
@@ -130,23 +135,24 @@ def building_too_low(measures: Mapping[str, Mapping[str, float]], units: str, hi
 
 def zones_all_too_tall(measures: Mapping[str, Mapping[str, float]], units: str, hint: str,
                        read_as: tuple[str, float] | None = None) -> list[Diagnostic]:
-    """``implausible_lowest_zone_height`` when every zone with a height stands over :data:`LOWEST`'s 50 m, naming
-    the lowest and the unit that would make it a storey's."""
+    """``implausible_lowest_zone_height`` when every zone with a height stands over :data:`LOWEST`'s 50 m and is at
+    least as wide as high (a room's shape), naming the lowest and the unit that would make it a storey's."""
     read_as = read_as or (units, METRES[units])
     heights = {zone: size["height"] for zone, size in measures.items() if size.get("height", 0) > 0}
-    if not heights:
+    if not heights or any(measures[zone].get("extent", 0) < height for zone, height in heights.items()):
         return []
     zone, value = min(heights.items(), key=lambda item: item[1])
     si = value * METRES[units]
     if si <= LOWEST.high:
         return []
-    mix = _mix_up(si, LOWEST, read_as)
-    likely = (f"the numbers look like {mix[0]} read as {read_as[0]} ({si / read_as[1]:.4g} {mix[0]}, a storey's "
-              f"height): {hint.format(unit=mix[0])}") if mix else "check the coordinates' unit"
+    mix = _mix_up(si, STOREY, read_as)
+    likely = (f"the numbers look like {mix[0]} read as {read_as[0]} ({si / read_as[1]:.4g} {mix[0]} = {mix[1]:.3g} "
+              f"m, a storey's height): {hint.format(unit=mix[0])}") if mix else "check the coordinates' unit"
     every = f"the lowest of {len(heights)} zones, {zone!r}," if len(heights) > 1 else f"the one zone, {zone!r},"
     return [Diagnostic(code=LOWEST.code, message=(
-        f"Every zone stands over {LOWEST.high / METRES[units]:.3g} {units} high ({every} is {value:.4g} {units}): "
-        f"a hall's height at most, never every room's; {likely}."),
+        f"Every zone stands over {LOWEST.high / METRES[units]:.3g} {units} high and is wider than high ({every} is "
+        f"{value:.4g} {units} high): a hangar's or a stadium's height, never every room's; unless the model is such "
+        f"a hall, {likely}."),
         details={"quantity": LOWEST.quantity, "units": units, "lowest_zone": zone, "height": value,
                  "zones": len(heights), "plausible_maximum": LOWEST.high / METRES[units],
                  "likely_file_unit": mix[0] if mix else None})]

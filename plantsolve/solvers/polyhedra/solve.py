@@ -19,16 +19,17 @@ from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
-from plantsolve.solvers.polyhedra.closure_verdict import volumes_not_determined
-from plantsolve.solvers.polyhedra.counted import floor_areas_left_out, multipliers_applied, subsurface_copies, \
-    subsurface_multipliers_applied
+from plantsolve.solvers.polyhedra.closure_verdict import totals_not_determined, volumes_not_determined
+from plantsolve.solvers.polyhedra.counted import floor_areas_left_out, implausible_multipliers, multipliers_applied, \
+    subsurface_copies, subsurface_multipliers_applied
 from plantsolve.solvers.polyhedra.declared import compare
 from plantsolve.solvers.polyhedra.duplicates import repeated_faces
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
 from plantsolve.solvers.polyhedra.file_units import METRES
-from plantsolve.solvers.polyhedra.plausibility import building_too_low, implausible, zones_all_too_tall
+from plantsolve.solvers.polyhedra.plausibility import ZONE_RANGE_CODES, building_too_low, implausible, \
+    zones_all_too_tall
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
 from plantsolve.solvers.polyhedra.subsurfaces import subsurface_warnings
@@ -359,6 +360,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             if differ:
                 warnings.append(differ)
     warnings.extend(multipliers_applied(zones))
+    warnings.extend(implausible_multipliers(zones, request.units, request.source))
     warnings.extend(floor_areas_left_out(zones, request.units))
     warnings.extend(subsurface_multipliers_applied(request, poly, area))
     sizes = zone_sizes(poly, gmap, n_zones)
@@ -368,23 +370,34 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     warnings.extend(implausible(zones, measured, request.units, hint, read_as(request)))
     if not any(w.code == "implausible_zone_height" for w in warnings):  # a height out of range says it already
         warnings.extend(building_too_low(measured, request.units, hint, read_as(request)))
+    if not any(w.code in ZONE_RANGE_CODES for w in warnings):  # a zone out of its range names the unit already
         warnings.extend(zones_all_too_tall(measured, request.units, hint, read_as(request)))
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")
     closed_count = sum(1 for z in zones if z["volume"] is not None)
+    partial = totals_not_determined(request.source)
     verdict = volumes_not_determined(zones, warnings)
-    if verdict is not None:  # the gravest first: Report.verdict is the first verdict among the warnings
-        warnings.insert(0, verdict)
+    # the gravest first: Report.verdict is the first verdict among the warnings
+    warnings[:0] = [v for v in (verdict, partial) if v is not None]
     return Solved(PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, faces_listed=listed, faces_in_csv=tabled,
         edge_length_total=edge_length_total,
         adjacency=adjacent, total_volume=total if all_closed else None,
         total_floor_area=float((floors * [z["multiplier"] * z["part_of_total_floor_area"] for z in zones]).sum()),
         report=Report(status="warning" if warnings else "ok",
-                      message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
+                      message=f"{closed_count} of {n_zones} zone(s) closed" + (_cut_short(partial) if partial else ""),
+                      warnings=warnings, details=details),
     ), files={FACE_TABLE: _npy(area, net_area, an.measures.perimeter, normal, planarity)}
         if tabled else {})
+
+
+def _cut_short(partial: Diagnostic) -> str:
+    """The summary's word on a file cut short: what it names against what was read."""
+    said = partial.details
+    past = f" and {said['objects_past_cut']} object(s) past the cut" if said["objects_past_cut"] else ""
+    return (f"; the file was cut short: it names {said['spaces_named']} space(s){past}, the totals are those of the "
+            f"{said['spaces_measured']} read")
 
 
 def _npy(*columns: np.ndarray) -> bytes:

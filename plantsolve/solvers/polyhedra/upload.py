@@ -468,7 +468,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                                         if k in used_zones]))
     warnings.extend(_zones_without_surfaces([(zone_names[k], zone_line[k]) for k in zone_names if k not in used_zones],
                                             len(used_zones)))
-    multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
+    multiplied = {k: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
+    multipliers = {zone_names[k]: m for k, m in multiplied.items()}
     warnings.extend(w.model_dump() for w in zone_list_strays(objects, zone_names))
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
@@ -481,7 +482,9 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                        "declared": {zone_names.get(k.lower(), k): v for k, v in declared.items()
                                     if k.lower() in used_zones},
                        "skipped": skipped[:MAX_SKIPPED_LISTED],
-                       "skipped_count": len(skipped), "warnings": warnings}}
+                       "skipped_count": len(skipped),
+                       **({"multiplied_zone_lines": {zone_names[k]: zone_line[k] for k in multiplied}}
+                          if multiplied else {}), "warnings": warnings}}
 
 
 def _zones_not_defined(undefined: list[tuple[str, int]]) -> list[Diagnostic]:
@@ -810,10 +813,16 @@ def parse_stl(content: bytes) -> dict:
 
 
 def _another_format(content: bytes) -> bool:
-    """Whether the file's first bytes are those of a format :func:`file_holds` knows by its signature alone (a binary
-    STL's 80-byte header is free text, so only signatures, not a guess from its lines, tell it apart)."""
+    """Whether the file is of a format :func:`file_holds` knows by a signature no binary STL has. Its 80-byte header
+    is free text ('plywood shelf', '{part 7}', '<Part1>'), so a header's first word is not enough: a zip's magic
+    bytes, a PLY's 'ply' line followed by its 'format' line, or a STEP, XML or JSON start followed by text, where a
+    binary STL's triangles hold NULs (their 2-byte attribute, 0 in nearly every file)."""
     holds = file_holds(content[:65536]) or ""
-    return holds.startswith(("a PLY", "an IFC", "a STEP", "a zip", "a gbXML", "an XML", "a JSON"))
+    if holds.startswith("a zip"):
+        return True
+    if holds.startswith("a PLY"):
+        return re.match(rb"ply\r?\nformat ", content.lstrip(b"\xef\xbb\xbf \r\n\t")) is not None
+    return holds.startswith(("an IFC", "a STEP", "a gbXML", "an XML", "a JSON")) and b"\x00" not in content[84:4096]
 
 
 def _read_stl(content: bytes) -> dict:

@@ -338,6 +338,33 @@ def parse_ldraw(text: str) -> dict:
     drawn: dict[int, str] = {}  # line -> file name, of subparts and primitives placed in a model
     stickers: set[str] = set()  # numbers of the parts the file defines whose header says they are stickers
 
+    def draws_only(file_name: str, role: str | None) -> bool:
+        """Whether the file a type-1 line places is a primitive or a subpart (stud.dat, no folder too): geometry
+        drawn, no part."""
+        return role == "geometry" or (role is None and (_key(file_name).startswith(GEOMETRY_FOLDERS) or (
+            lookup(file_name) is None and official(file_name) is not None)))
+
+    parts_in: dict[str, int] = {}
+
+    def parts_placed_by(raw: str, stack: tuple[str, ...]) -> int:
+        """How many parts a type-1 line places: a held sub-model's, expanded; a part one; a primitive, a sub-model
+        the file lacks (submodels_missing says it) or one that includes itself none."""
+        tokens = raw.split()
+        if tokens[:1] != ["1"] or len(tokens) < 15:
+            return 1 if tokens[:1] == ["1"] else 0
+        file_name = raw.split(None, 14)[14].strip()
+        sub = _resolve(file_name, files)
+        role = roles.get(sub, "model") if sub is not None else None
+        if draws_only(file_name, role) or (role is None and _key(file_name).endswith(MODEL_EXTENSIONS)):
+            return 0
+        if role != "model":
+            return 1
+        if sub in stack or len(stack) > MAX_DEPTH:
+            return 0
+        if sub not in parts_in:
+            parts_in[sub] = sum(parts_placed_by(line, (*stack, sub)) for _, line in files[sub])
+        return parts_in[sub]
+
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
             tokens = raw.split()
@@ -375,8 +402,7 @@ def parse_ldraw(text: str) -> dict:
             local_rot = np.array(values[3:]).reshape(3, 3)
             sub = _resolve(file_name, files)
             role = roles.get(sub, "model") if sub is not None else None
-            if role == "geometry" or (role is None and (_key(file_name).startswith(GEOMETRY_FOLDERS) or (
-                    lookup(file_name) is None and official(file_name) is not None))):  # stud.dat, no folder
+            if draws_only(file_name, role):
                 counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws (scaled or not)
                 drawn.setdefault(number, file_name)
                 continue
@@ -459,11 +485,13 @@ def parse_ldraw(text: str) -> dict:
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
 
     expand(main, np.eye(3), np.zeros(3), "", (main,))
-    # what the skipped placements would have placed, counted before a line repeated by its sub-model's placements is
-    # said once: a verdict on the model needs the parts read to be most of it (a placement a sub-model's missing
-    # section or its own loop skips is not counted: submodels_missing says the one, the other places nothing)
-    not_read = sum(1 for entry in skipped if not entry["reason"].startswith(("places sub-model", "sub-model ",
-                                                                             "line type ")))
+    # what the skipped placements would have placed (a sub-model placed by a scaling matrix: all its parts), counted
+    # before a line repeated by its sub-model's placements is said once: a verdict on the model needs the parts read
+    # to be most of it (a placement a sub-model's missing section or its own loop skips is not counted:
+    # submodels_missing says the one, the other places nothing)
+    raw_of = {number: raw for section in files.values() for number, raw in section}
+    not_read = sum(parts_placed_by(raw_of.get(entry["line"], ""), (main,)) for entry in skipped
+                   if not entry["reason"].startswith(("places sub-model", "sub-model ", "line type ")))
     # a line of a sub-model placed n times is skipped n times: one line of the file, said once
     first_of_line: dict[int, dict] = {}
     for entry in skipped:

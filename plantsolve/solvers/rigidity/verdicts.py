@@ -58,8 +58,8 @@ def unknown_elements(numbers: Sequence[str], positions: np.ndarray) -> int:
 def coverage_verdict(known: int, unknown_numbers: Sequence[str], unknown_positions: np.ndarray,
                      not_read: int = 0) -> Diagnostic | None:
     """``rigidity_not_determined`` when the known parts are no majority of the model's elements: those the catalogue
-    lacks, and the placements the reader skipped (``not_read``: a matrix that scales, a position not finite, a line
-    cut), each one element at least."""
+    lacks, and the parts the placements the reader skipped would have placed (``not_read``: a matrix that scales, a
+    position not finite, a line cut; a sub-model's line all its parts), each one element."""
     if not len(unknown_numbers) and not not_read:
         return None
     elements = unknown_elements(unknown_numbers, unknown_positions)
@@ -68,7 +68,8 @@ def coverage_verdict(known: int, unknown_numbers: Sequence[str], unknown_positio
         return None
     counted = [(f"{len(unknown_numbers)} part(s) not in the catalogue, {elements} element(s) counting a chain of "
                 "segments as one")] if len(unknown_numbers) else []
-    counted += [f"{not_read} placement(s) whose lines could not be read (skipped_lines)"] if not_read else []
+    counted += [f"{not_read} part(s) placed by lines that could not be read (skipped_lines; a sub-model's line "
+                "counts its parts)"] if not_read else []
     return Diagnostic(
         code="rigidity_not_determined", message=f"rigidity not determined: the parts "
         f"{'not in the catalogue or not read' if not_read else 'not in the catalogue'} are {share:.0%} of the model "

@@ -64,6 +64,28 @@ def test_a_room_in_metres_and_a_hall_beside_rooms_are_not_named():
     assert not {c for c in codes(hall) if c.startswith("implausible")}
 
 
+def test_a_tower_or_an_atrium_drawn_as_one_zone_is_no_room_in_inches():
+    # taller than wide: no room's shape (a 60 m tower in metres was named 'inches read as metres')
+    for tower in (box_stl(30, 30, 60), box_stl(20, 12, 150)):
+        assert not {c for c in codes(solved("tower.stl", tower)) if c.startswith("implausible")}
+
+
+def test_a_hall_wider_than_high_is_named_saying_what_it_would_have_to_be():
+    (warning,) = [w for w in solved("hall.stl", box_stl(250, 200, 100)).report.warnings
+                  if w.code == "implausible_lowest_zone_height"]
+    assert "stadium" in warning.message and warning.details["likely_file_unit"] == "in"
+    assert "2.54 m" in warning.message  # 100 in, a storey's height
+    # 60 m read as inches is 1.52 m, as feet 18 m: neither a storey's, and no unit is named ('60 ft' was, as one)
+    (low,) = [w for w in solved("hall.stl", box_stl(200, 150, 60)).report.warnings
+              if w.code == "implausible_lowest_zone_height"]
+    assert low.details["likely_file_unit"] is None
+
+
+def test_a_large_room_in_inches_is_named_once_by_its_volume():
+    result = solved("room.stl", box_stl(10 / INCH, 8 / INCH, 3.5 / INCH))
+    assert "implausible_zone_volume" in codes(result) and "implausible_lowest_zone_height" not in codes(result)
+
+
 def test_obj_rooms_in_inches_without_a_header_are_named_with_inches():
     result = solved("rooms.obj", two_rooms_obj(1 / INCH))
     (warning,) = [w for w in result.report.warnings if w.code == "implausible_lowest_zone_height"]
@@ -78,9 +100,19 @@ def test_a_ply_scan_named_stl_is_refused_naming_ply():
     assert error.loc == ("file",) and "PLY" in error.msg
 
 
-def test_a_binary_stl_cut_short_is_still_read_with_its_whole_triangles():
-    result = solved("room.stl", box_stl(5, 4, 3)[:-25])
-    assert "truncated_file" in codes(result)
+@pytest.mark.parametrize("header", [b"", b"plywood shelf", b"ply", b"{part 7}", b"<Part1>", b"[mesh]"])
+def test_a_binary_stl_cut_short_is_still_read_with_its_whole_triangles(header):
+    # a header is free text: its first word ('ply', '{') is no other format's signature (they were refused)
+    room = box_stl(5, 4, 3)
+    cut = (header.ljust(80, b" ") if header else room[:80]) + room[80:-25]
+    result = solved("room.stl", cut)
+    assert "truncated_file" in codes(result) and result.report.details["source"]["faces"] == 11
+
+
+def test_a_ply_written_in_text_after_its_binary_header_word_is_still_refused():
+    ply = b"ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nend_header\r\n" + bytes(range(256)) * 4
+    with pytest.raises(InputRejected):
+        parse_upload(StoredInput.from_bytes("room.stl", ply), None)
 
 
 def test_a_closed_zone_of_no_volume_is_named():

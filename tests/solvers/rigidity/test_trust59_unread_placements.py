@@ -57,3 +57,16 @@ def test_a_missing_sub_model_is_said_by_its_own_verdict_not_counted_as_unread():
                              "model.mpd")
     assert request.source["placements_not_read"] == 0
     assert codes(result)[0] == "submodels_missing" and "rigidity_not_determined" not in codes(result)
+
+
+def test_a_sub_model_placed_by_a_scaling_matrix_counts_every_part_it_holds():
+    # its one line placed six bricks: counted as one, the two bricks read were 'rigid: true' for a model of eight
+    text = ("0 FILE main.ldr\n" + brick(0) + brick(-24) + "1 16 0 -48 0 2 0 0 0 2 0 0 0 2 tower.ldr\n"
+            + "0 FILE tower.ldr\n" + "".join(brick(-24 * k) for k in range(5)) + f"1 16 0 -120 0 {IDENTITY} top.ldr\n"
+            + "0 FILE top.ldr\n" + brick(0) + "1 16 0 0 0 1 0 0 0 1 0 0 0 1 stud.dat\n")
+    request, result = solved(text, "model.mpd")
+    assert request.source["placements_not_read"] == 6 and len(request.parts) == 2
+    assert result.rigid is None and codes(result)[0] == "rigidity_not_determined"
+    (verdict,) = [w for w in result.report.warnings if w.code == "rigidity_not_determined"]
+    assert verdict.details["placements_not_read"] == 6 and verdict.details["unknown_share"] == pytest.approx(0.75)
+    assert "6 part(s) placed by lines that could not be read" in verdict.message

@@ -1,0 +1,54 @@
+"""An IFC file cut mid-entity is read as far as the cut (``truncated_file``), but its totals read as the building's:
+'2 of 2 zone(s) closed', 108 m³, no verdict, for a file naming three spaces before the cut and a fourth its storey
+aggregates past it. The report's verdict is NOT DETERMINED (``totals_not_determined``), naming the spaces the file
+names, those not measured and the objects past the cut; the summary says the totals are those read."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.polyhedra.solve import solve
+from plantsolve.solvers.polyhedra.upload import parse_upload
+
+IFC = (Path(__file__).parent / "data/ifcopenshell_spaces.ifc").read_text()
+
+
+def solved(text: str):
+    return solve(parse_upload(StoredInput.from_bytes("spaces.ifc", text.encode()), None)).result
+
+
+def cut_inside(number: int, text: str = IFC) -> str:
+    """The file cut in the middle of entity ``#number``'s line."""
+    at = text.index(f"\n#{number}=") + 1
+    return text[:at + (text.index("\n", at) - at) // 2]
+
+
+def test_a_cut_ifc_whose_storey_aggregates_a_space_past_the_cut_is_not_determined():
+    result = solved(cut_inside(60))  # #18, #37, #54 named ('103' without its body); #67 aggregated, past the cut
+    assert [z.id for z in result.zones] == ["101", "102"] and result.total_volume == pytest.approx(108.0)
+    assert result.report.verdict.code == "totals_not_determined" and result.report.verdict.label == "NOT DETERMINED"
+    (verdict,) = [w for w in result.report.warnings if w.code == "totals_not_determined"]
+    assert verdict.details["spaces_named"] == 3 and verdict.details["spaces_measured"] == 2
+    assert verdict.details["spaces_not_measured"] == ["#54 IfcSpace '103'"] and verdict.details["objects_past_cut"] == 1
+    assert "truncated_file" in {w.code for w in result.report.warnings}
+    assert result.report.message == ("2 of 2 zone(s) closed; the file was cut short: it names 3 space(s) and 1 "
+                                     "object(s) past the cut, the totals are those of the 2 read")
+
+
+def test_relations_written_after_the_cut_count_no_object_past_it_and_the_totals_still_are_not_determined():
+    # as Revit writes them, the storey's aggregation last: nothing in the file names what lies past the cut
+    relation = next(line for line in IFC.splitlines(keepends=True) if line.startswith("#19=IFCRELAGGREGATES"))
+    result = solved(cut_inside(60, IFC.replace(relation, "")))
+    (verdict,) = [w for w in result.report.warnings if w.code == "totals_not_determined"]
+    assert verdict.details["objects_past_cut"] == 0 and verdict.details["spaces_named"] == 3
+    assert "cannot be counted" in verdict.message and result.report.verdict.code == "totals_not_determined"
+
+
+def test_the_whole_file_and_one_missing_only_its_trailer_are_determined():
+    assert solved(IFC).report.verdict is None
+    trailer_lost = IFC[:IFC.rindex("END-ISO-10303-21;")]  # every instance and 'ENDSEC;' there: nothing lost
+    result = solved(trailer_lost)
+    assert result.report.verdict is None and "truncated_file" in {w.code for w in result.report.warnings}
