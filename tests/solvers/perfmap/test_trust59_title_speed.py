@@ -12,6 +12,7 @@ import pytest
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
 from plantsolve.solvers.perfmap.upload import parse_upload
+from tests.solvers.perfmap.test_perfmap_exports2 import read_by_gspy
 from tests.solvers.perfmap.test_trust59_exports_speed import _fitted
 
 COMPMAP = Path(__file__).parent / "data" / "gasturb" / "compmap.map"  # speeds 0.45 to 1.0
@@ -56,8 +57,6 @@ def test_a_dimensionless_title_speed_over_rpm_still_warns_implausible_speed():
 
 
 def test_gspy_reads_the_rpm_export_whose_title_states_the_unit(tmp_path):
-    from tests.solvers.perfmap.test_perfmap_exports2 import read_by_gspy
-
     fitted = _fitted("speed [rpm]", 10000.0)
     ((_, gsp),) = read_by_gspy(fitted, tmp_path)
     assert "speed [rpm]" in gsp.map_title  # GSPy keeps the title's words, and reads the tables after it as written
