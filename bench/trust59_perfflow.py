@@ -4,7 +4,8 @@ cut workbook sheet, NaN and 1e300 cells, a whole map of inverse ratios, rows and
 workbook, GasTurb speed lines), a workbook a few bytes short, another kind's file (IFC, STL, tube scan) sent to
 either kind; a flowmeter with probe points outside the pipe, electrodes longer than the liner or a hair long (metres
 under mm), a field file of another kind; GasTurb maps with a value lost or added inside a wrapped record; the
-GasTurb export of a map in rpm or per cent (GasTurb reads a map's speed as relative), read back by this service.
+GasTurb export of a map in rpm or per cent (GasTurb reads a map's speed as relative), read back by this service; a
+GasTurb title whose speed text is free text or contradicted by relative speeds; measured speeds on every row.
 
 Same machinery and outcome classes as bench/trust58_perfflow.py (``same`` / ``flag`` / ``look``; ``WRONG`` is a
 confident wrong answer).
@@ -109,8 +110,20 @@ def perfmap_cases() -> list[tuple]:
     ifc = _text("examples/dedup/zoo_ifc2x3.ifc")
     stl = ("solid cube\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 1\n   vertex 1 0 1\n   vertex 0 1 1\n"
            "  endloop\n endfacet\nendsolid cube\n")
+    measured_speeds = "\n".join([speed_rows[0]] + [f"{float(r.split(',', 1)[0]) + (k % 7) - 3:g},{r.split(',', 1)[1]}"
+                                                   for k, r in enumerate(speed_rows[1:])]) + "\n"
+
+    def titled(title: str) -> bytes:
+        return "\n".join(["99    " + title] + compmap.split("\n")[1:]).encode()
+
     return [
         ("perfmap", "clean csv", "map.csv", csv.encode(), None, "same", None),
+        ("perfmap", "speed [rpm] measured on every row (each row a setting of its own)", "speed.csv",
+         measured_speeds.encode(), None, "flag", None),
+        ("perfmap", "GasTurb title 'flow [kg/s], speed [N/Nd]' (a title's free text)", "comp.map",
+         titled("Compressor map; flow [kg/s], speed [N/Nd]"), None, "same", titled("Compressor map; flow [kg/s]")),
+        ("perfmap", "GasTurb title 'speed [%]' over speeds 0.45..1", "comp.map",
+         titled("Compressor map; flow [kg/s], speed [%]"), None, "same", titled("Compressor map; flow [kg/s]")),
         ("perfmap", "efficiency without unit holding per cent", "map.csv", per_cent.encode(), None, "flag", None),
         ("perfmap", "pressure [kPa] holding ratios", "map.csv", kpa_ratios.encode(), None, "flag", None),
         ("perfmap", "a whole map of inverse ratios p1/p2", "map.csv", inverse.encode(), None, "flag", None),

@@ -41,7 +41,7 @@ from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
 from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
-from plantsolve.solvers.perfmap.units import UnitError, check_quantity, parse_speed_unit
+from plantsolve.solvers.perfmap.units import UnitError, check_quantity, parse_speed_unit, revolutions_per_minute
 from plantsolve.solvers.skipped_input import truncated_file
 
 SPEED_TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio")
@@ -545,15 +545,18 @@ def _same_unit(a, b) -> bool:
 
 def _title_speed_unit(title: str) -> str | None:
     """The speed unit a title states ('speed [rpm]', as this service's export writes a map fitted in rpm or per
-    cent), or None; a unit that is no speed is refused naming the title."""
+    cent) when it is a shaft speed's or a per cent's, else None. A title is free text (GasTurb's own maps name their
+    speed as they like, 'speed [N/Nd]'): what is no such unit is left to the speeds' values, not refused."""
     m = _TITLE_SPEED.search(title)
     if m is None:
         return None
+    text = m.group(1).strip()
     try:
-        parse_speed_unit(m.group(1).strip())
-    except UnitError as e:
-        raise reject(f"the title's speed unit: {e}", ("file", "title")) from None
-    return m.group(1).strip()
+        unit = parse_speed_unit(text)
+    except UnitError:
+        return None
+    rotational = not unit.dimensionless and revolutions_per_minute(unit.unit) is not None
+    return text if rotational or unit.text in ("%", "‰") else None
 
 
 def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | None]:
@@ -674,6 +677,9 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[int],
     top_speed = max(p["setting"][-1] for p in positions)
     relative = top_speed <= MAX_RELATIVE_SPEED
     titled = _title_speed_unit(title)
+    untaken = titled if titled is not None and relative else None
+    if untaken is not None:  # speeds up to 3 in rpm or per cent are no compressor's: the title's unit is wrong
+        titled = None
     speed_unit = titled or ("1" if relative else "")
     names = [sets[0].label, "Nc"] if vg else ["Nc"]
     setting_units = [sets[0].unit, speed_unit] if vg else [speed_unit]
@@ -696,14 +702,15 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[int],
             f"{', ' + repr(title) if title else ''}): {len(positions)} speed lines of {len(flow.args)} beta points"
             f"{f' at {len(sets)} values of {sets[0].label}' if vg else ''}. Speed: "
             + (f"in {titled}, as the title states" if titled else
-               "relative corrected speed N/sqrt(T) over its map reference (dimensionless)")
+               "relative corrected speed N/sqrt(T) over its map reference (dimensionless)"
+               + (f", not in the title's {untaken} (speeds up to {top_speed:g})" if untaken else ""))
             + "; flow: corrected mass flow W sqrt(T)/P "
             f"({'in ' + flow_unit + ', from the ' + unit_source if flow_unit else 'the file states no unit: GasTurb writes kg/s in SI, lb/s in imperial units; give it with the units option'}); "
             "pressure ratio; efficiency a fraction.")
     notes.insert(0, Diagnostic(code="upload_settings", message=what, details={
         "format": "gasturb", "map_type": map_type, "title": title, "names": names, "units": setting_units,
         "speed": f"in {titled} (the title)" if titled else "relative corrected speed (N/sqrt(T)) / (N/sqrt(T))_ref, "
-                 "dimensionless",
+                 "dimensionless" + (f" (the title's {untaken} not taken)" if untaken else ""),
         "flow": f"corrected mass flow W sqrt(T)/P [{flow_unit or 'unit not stated'}]", "flow_unit_from": unit_source,
         "beta": [float(b) for b in flow.args], "reynolds": reynolds,
         "surge_line": limits.get("Surge Line"), "choke_line": limits.get("Choke Line")}))

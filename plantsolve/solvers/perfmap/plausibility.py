@@ -13,6 +13,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
+from plantsolve.solvers.perfmap.gasturb_map import MAX_RELATIVE_SPEED
 from plantsolve.solvers.perfmap.setting_lines import Setting
 from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.units import UnitError, parse_speed_unit, parse_unit, registry, revolutions_per_minute
@@ -199,11 +200,6 @@ def last_setting_not_speed(names: list[str], units: list[str | None]) -> Diagnos
         "for exports a cycle code can use.", quantity="settings", setting=last, setting_names=list(names))
 
 
-# GasTurb's and GSP's map files hold the relative corrected speed (N/sqrt(theta) over its design value: GasTurb's
-# samples run 0.2 to 1.1); above this a .map's speed is per cent or rpm (this service's .map reader says so too)
-RELATIVE_SPEED_MAX = 3.0
-
-
 def exports_speed_not_relative(names: list[str], units: list[str | None], speeds: list[float]) -> Diagnostic | None:
     """The warning of a GasTurb export whose speed column is no relative speed: the tables hold the last setting's
     values as fitted, and GasTurb and GSP read a map's speed as relative corrected speed, so a map in rpm or per
@@ -217,7 +213,7 @@ def exports_speed_not_relative(names: list[str], units: list[str | None], speeds
         return None
     if parsed is not None and parsed.dimensionless and parsed.text == "1":
         return None
-    if parsed is None and (values.max() <= RELATIVE_SPEED_MAX or not named_as_speed(names[-1])):
+    if parsed is None and (values.max() <= MAX_RELATIVE_SPEED or not named_as_speed(names[-1])):
         return None  # a unitless setting not named as the speed (the paper's phi) is not judged, as above
     if parsed is not None and not parsed.dimensionless and revolutions_per_minute(parsed.unit) is None:
         return None  # not a rotational speed (an angle is exports_last_setting_not_speed's)
@@ -226,7 +222,7 @@ def exports_speed_not_relative(names: list[str], units: list[str | None], speeds
         "exports_speed_not_relative",
         f"The GasTurb export (map_gasturb*.map) writes the speed lines' values as fitted, {names[-1]!r} {written}, in "
         f"its speed column, which GasTurb and GSP read as relative corrected speed (N/sqrt(theta) over its design "
-        f"value, about 0.2 to 1.1; a .map read here warns implausible_speed above {RELATIVE_SPEED_MAX:g}). Submit the "
+        f"value, about 0.2 to 1.1; a .map read here warns implausible_speed above {MAX_RELATIVE_SPEED:g}). Submit the "
         "speed as a fraction of design (a column 'Nc [-]') for a GasTurb map, or set the cycle code's map design "
         "speed in these units. map_pycycle.py is scaled by pyCycle's design point and works in any speed unit.",
         quantity="settings", setting=names[-1], unit=unit, values=[float(values.min()), float(values.max())])

@@ -775,6 +775,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         cut = f" (its only data row, {what} {cut_line}, is cut short)" if cut_note else ""
         raise reject(f"the table has a header ({what} {numbers[0]}) but no data rows{cut}")
     names = {r: rows[0][col[r]].strip() for r in col}
+    _refuse_row_settings(lines_of, setting_cols, names, what)
     if scale["efficiency"] != 1.0:
         _refuse_mixed_efficiency(groups, lines_of, names["efficiency"], unit_of["efficiency"], what)
     reading, contradictions = _values_against_units(groups, setting_cols, names, unit_of, scale)
@@ -837,6 +838,28 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
     # is the same request (the warnings' positions name the same speed line)
     keys = sorted(groups)
     return [groups[k] for k in keys], [lines_of[k] for k in keys], notes, meta
+
+
+def _refuse_row_settings(lines_of: dict[tuple, list[int]], setting_cols: list[str], names: dict[str, str],
+                         what: str) -> None:
+    """A table whose rows mostly hold a setting of their own (measured speeds, 9497, 9503, …, where the speed line's
+    set value was meant) is refused once, naming the column: each row would be a speed line of one point, refused
+    one by one as too short, with no word of why."""
+    counts = [len(n) for n in lines_of.values()]
+    singles = counts.count(1)
+    if singles < 3 or 2 * singles < sum(counts):
+        return
+    keys = sorted(lines_of, key=lambda k: lines_of[k][0])
+    varying = [i for i, _ in enumerate(setting_cols) if 2 * len({k[i] for k in keys}) >= sum(counts)]
+    shown = varying or list(range(len(setting_cols)))
+    column = " and ".join(repr(names[setting_cols[i]]) for i in shown)
+    examples = ", ".join(f"{keys[m][shown[0]]:g}" for m in range(min(3, len(keys))))
+    raise reject(
+        f"column {column}: {singles} of the {sum(counts)} rows each hold a setting of their own ({examples}, …), "
+        "and a speed line needs at least 3 rows at one setting. Measured speeds? Round them to the speed line's set "
+        "value, or give the set value's column as the setting and map the measured one to 'ignore' with the "
+        f"'columns' option. First rows: {what} {', '.join(str(lines_of[k][0]) for k in keys[:3])}.",
+        ("file", "header"))
 
 
 _PERCENTS = (FRACTIONS, 100.0)  # a column whose values lie in here (none at or below 1.5) holds per cent

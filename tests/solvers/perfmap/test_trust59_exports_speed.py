@@ -12,6 +12,7 @@ import pytest
 
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
+from plantsolve.solvers.perfmap.plausibility import exports_speed_not_relative
 from plantsolve.solvers.perfmap.solve import solve
 from plantsolve.solvers.perfmap.upload import parse_upload
 
@@ -67,3 +68,16 @@ def test_a_relative_speed_export_has_no_speed_unit_in_its_title():
     assert "speed [" not in text.splitlines()[0]
     back = parse_upload(StoredInput.from_bytes("back.map", data), {"map": False})
     assert back.setting_units == ["1"]
+
+
+@pytest.mark.parametrize("names, units, speeds", [
+    (["Nc"], ["1"], [0.5, 1.15]),  # an overspeed line
+    (["Nc"], ["-"], [0.45, 1.0]),
+    (["Nc"], ["fraction"], [0.5, 1.1]),
+    (["Nc"], [None], [0.5, 1.15]),
+    (["N/Nd"], [None], [0.2, 1.1]),
+    (["igv", "Nc"], ["deg", "1"], [0.5, 1.1]),
+    (["theta", "phi"], [None, None], [0.0, 2.0]),  # the paper's phi, no unit and not named as the speed
+])
+def test_relative_speeds_however_spelled_are_not_warned(names, units, speeds):
+    assert exports_speed_not_relative(names, units, speeds) is None
