@@ -130,7 +130,7 @@ def test_a_perfmap_run_prints_each_of_its_warnings_with_its_code(tmp_path):
          "map_pycycle.py"])
 
 
-def test_serve_warns_at_start_when_open_without_keys(tmp_path, monkeypatch, caplog):
+def test_serve_warns_at_start_when_open_without_keys(tmp_path, monkeypatch, caplog, serve_in_this_process):
     """`plantsolve serve --host 0.0.0.0` without API_KEYS says so before the first request arrives."""
     import argparse
 
@@ -140,7 +140,6 @@ def test_serve_warns_at_start_when_open_without_keys(tmp_path, monkeypatch, capl
     monkeypatch.delenv("API_KEYS", raising=False)
     monkeypatch.setenv("DATA_DIR", str(tmp_path / "var"))
     monkeypatch.setenv("EMBEDDED_MODE", "thread")
-    monkeypatch.setattr(cli.gc, "freeze", lambda: None)  # the test process's heap stays collectable
     started = []
     monkeypatch.setattr(cli, "serve_on", lambda app, sock, args: started.append(args.host))
     for host, warned in (("0.0.0.0", True), ("127.0.0.1", False)):

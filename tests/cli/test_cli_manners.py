@@ -116,11 +116,10 @@ def test_a_busy_port_fails_at_once_before_any_start_up_work(tmp_path):
     assert not (tmp_path / "var").exists()  # no database made, no migration run, no job process started
 
 
-def test_serve_runs_on_the_socket_it_bound(tmp_path, monkeypatch):
+def test_serve_runs_on_the_socket_it_bound(tmp_path, monkeypatch, serve_in_this_process):
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("DATA_DIR", str(tmp_path / "var"))
     monkeypatch.setenv("EMBEDDED_MODE", "thread")
-    monkeypatch.setattr(cli.gc, "freeze", lambda: None)
     served = []
     monkeypatch.setattr(cli, "serve_on", lambda app, sock, args: served.append(sock.getsockname()))
     with socket.socket() as probe:
@@ -141,7 +140,7 @@ def test_field_paths(loc, expected):
 @pytest.mark.parametrize("flag,env,expected", [("warning", None, "warning"), (None, "error", "error"),
                                                ("debug", "error", "debug"), (None, None, "info")])
 def test_serve_log_level_reaches_the_plantsolve_loggers_and_the_job_processes(tmp_path, monkeypatch, flag, env,
-                                                                               expected):
+                                                                               expected, serve_in_this_process):
     import logging
 
     from plantsolve.app.settings import get_settings
@@ -154,7 +153,6 @@ def test_serve_log_level_reaches_the_plantsolve_loggers_and_the_job_processes(tm
     else:
         monkeypatch.delenv("LOG_LEVEL", raising=False)
     get_settings.cache_clear()
-    monkeypatch.setattr(cli.gc, "freeze", lambda: None)
     logger = logging.getLogger("plantsolve")
     monkeypatch.setattr(logger, "level", logger.level)  # restored afterwards for the other tests
     seen = []

@@ -208,13 +208,13 @@ def _name(t: Text) -> str:
     return repr(text if len(text) <= 40 else text[:37] + "...")
 
 
-def text_problems(fig: Figure, dpi: float | None = None) -> list[str]:
+def text_problems(fig: Figure, dpi: float | None = None, texts: list[Text] | None = None) -> list[str]:
     """Text that cannot be read at the saved size (``dpi``: the resolution the figure is saved at; default the
     figure's own): smaller than :data:`MIN_TEXT_PX`; cut off at the figure's edge; lying over another axes (a
     title running into a colour bar, a 3-D panel's z label under its neighbour); or over other text."""
     dpi = dpi or fig.dpi
     fig.set_dpi(dpi)
-    texts = _drawn_texts(fig)
+    texts = _drawn_texts(fig) if texts is None else texts
     renderer = fig.canvas.get_renderer()
     problems = []
     page = fig.bbox
@@ -285,13 +285,13 @@ def _pixels(box: Bbox, shape: tuple[int, ...]) -> tuple[slice, slice] | None:
     return (slice(r0, r1), slice(x0, x1)) if x1 > x0 and r1 > r0 else None
 
 
-def contrast_problems(fig: Figure, dpi: float | None = None) -> list[str]:
+def contrast_problems(fig: Figure, dpi: float | None = None, texts: list[Text] | None = None) -> list[str]:
     """Text whose colour is too close to what lies under it: the figure is drawn without its texts, and the
     median contrast ratio of each text's colour against the pixels under its box (under its own background box,
     when it has one) must be at least :data:`MIN_CONTRAST` (contour labels in a line colour on a filled map,
     white labels over the light end of a colour map)."""
     fig.set_dpi(dpi or fig.dpi)
-    texts = _drawn_texts(fig)
+    texts = _drawn_texts(fig) if texts is None else texts
     renderer = fig.canvas.get_renderer()
     boxes = [t.get_window_extent(renderer) for t in texts]
     shown = [t.get_visible() for t in texts]
@@ -376,14 +376,15 @@ def _outlines(ax) -> list[tuple[str, Path]]:
     return found
 
 
-def empty_band_problems(fig: Figure, dpi: float | None = None) -> list[str]:
+def empty_band_problems(fig: Figure, dpi: float | None = None, drawn: bool = False) -> list[str]:
     """Filled data (an image, filled contours, a colour mesh) that stops short of the closed outline it lies in,
     leaving a blank band inside the data's range: a weight function that ends millimetres before the pipe wall
     drawn round it, an image whose edge columns are empty. A band is the part of the outline's inside that the
     data does not cover, reaches the outline, and is wider than :data:`BAND_PX` and :data:`BAND_SHARE` of the
     axes; holes away from the outline (an island of no data) are not bands."""
     fig.set_dpi(dpi or fig.dpi)
-    FigureCanvasAgg(fig).draw()
+    if not drawn:
+        FigureCanvasAgg(fig).draw()
     renderer = fig.canvas.get_renderer()
     height = int(round(fig.bbox.height))
     problems = []
@@ -470,8 +471,14 @@ def tolerance_problems(fig: Figure, declared: list[dict]) -> list[str]:
 
 
 def figure_problems(fig: Figure, dpi: float | None = None, tolerances: list[dict] | None = None) -> list[str]:
-    return (axis_problems(fig) + legend_problems(fig) + text_problems(fig, dpi) + contrast_problems(fig, dpi)
-            + empty_band_problems(fig, dpi) + tolerance_problems(fig, tolerances or []))
+    """Every check, with the figure drawn three times instead of five: the text and contrast checks read the texts of
+    one draw at the saved resolution, and the band check reads the places of the contrast check's last draw (made at
+    that resolution with the layout held), not a draw of its own: a draw is most of a check's CPU."""
+    problems = axis_problems(fig) + legend_problems(fig)
+    fig.set_dpi(dpi or fig.dpi)
+    texts = _drawn_texts(fig)
+    return (problems + text_problems(fig, dpi, texts) + contrast_problems(fig, dpi, texts)
+            + empty_band_problems(fig, dpi, drawn=True) + tolerance_problems(fig, tolerances or []))
 
 
 def check_figure(fig: Figure, dpi: float | None = None, tolerances: list[dict] | None = None) -> None:
