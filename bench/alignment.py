@@ -42,6 +42,16 @@ depending on how close the hardest loop is to its singular point, not on the net
     python bench/alignment.py --scaling-only --family plant --side 46 --side 92 --code lu --code before \
         --before DIR --repeat 2 --steps
 
+``--instructions`` counts the instructions of the solve alone (the request is built before) under
+``valgrind --tool=callgrind``, which repeats to a few parts in a million where CPU seconds on a loaded machine move
+by 20 %: each size and code once (``--side``, default 46 and 92: 4,839 and 19,365 plant-like components; ``--code``
+as above), the exponent of instructions ~ components^k between sizes, iterations, the largest port difference from
+``this`` and whether the same connections were cut. About 50 times slower than the solve (the 19,365-component
+network: ~10 minutes a code). The counts and per-function profiles stay in ``--callgrind-dir`` for
+``callgrind_annotate --inclusive=yes``:
+
+    python bench/alignment.py --instructions --family plant --side 46 --side 66 --side 92 --code lu \
+        --code before --before DIR
 ``--conflicts``: the cut choice on 360 small synthetic conflicts (loop grids of 2 x 2 to 4 x 3 nodes, 6 seeds, 6
 placements of the second tie-in, with and without inline valves), each solved as written, with its components
 renamed (ids sorting the other way), shuffled, in cm and moved rigidly: cuts, answers that move a component more
@@ -54,9 +64,13 @@ written, and with ``--before DIR`` the answers closer to or further from the req
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import multiprocessing as mp
+import os
+import re
 import resource
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -156,6 +170,21 @@ def plant_network(side: int, seed: int = 7, options: dict | None = None):
                                             "options": options or {}})
 
 
+def _request(side: int, family: str, options: dict):
+    """The network of ``family`` (``grid``, ``plant`` or ``conflict``) and ``side``, with ``options``."""
+    from plantsolve.solvers.alignment.synthetic import grid_network
+
+    if family == "plant":
+        return plant_network(side, options=options)
+    if family == "conflict":
+        from plantsolve.solvers.alignment.synthetic import conflicting_tie_ins
+
+        return conflicting_tie_ins(side, side, seed=2024, shift=(0.0, 30.0, 0.0), turn=2.0, valve_every=7,
+                                   options=options)
+    return grid_network(side, side, valve_every=7, tie_ins=((0, 0), (side - 1, side - 1)),
+                        origin=(1.0e6, 2.0e5, 1.0e4), seed=2024, options=options)
+
+
 def _run(side: int, method: str, max_iterations: int | None, queue, code: str | None = None,
          family: str = "grid", lu: bool = False, shuffled: bool = False, steps: bool = False) -> None:
     if code is not None:
@@ -164,19 +193,9 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
     import contextlib
 
     from plantsolve.solvers.alignment.solve import solve
-    from plantsolve.solvers.alignment.synthetic import grid_network
 
     options = {"method": method} if max_iterations is None else {"method": method, "max_iterations": max_iterations}
-    if family == "plant":
-        req = plant_network(side, options=options)
-    elif family == "conflict":
-        from plantsolve.solvers.alignment.synthetic import conflicting_tie_ins
-
-        req = conflicting_tie_ins(side, side, seed=2024, shift=(0.0, 30.0, 0.0), turn=2.0, valve_every=7,
-                                  options=options)
-    else:
-        req = grid_network(side, side, valve_every=7, tie_ins=((0, 0), (side - 1, side - 1)),
-                           origin=(1.0e6, 2.0e5, 1.0e4), seed=2024, options=options)
+    req = _request(side, family, options)
     mode = contextlib.nullcontext()
     if lu:
         from plantsolve.solvers.alignment.kkt import use_schur
@@ -411,6 +430,97 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
           "pass of it is).")
 
 
+# CPython's C functions behind os.getppid() and os.getpgrp(), which the counted child calls just before and just after
+# the solve and nothing else calls: callgrind zeroes its counts at the first and writes them out at the second
+CALLGRIND_ZERO, CALLGRIND_DUMP = "os_getppid", "os_getpgrp"
+# one thread everywhere and a fixed string hash, so that the count is the same from run to run
+COUNTED_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "PYTHONHASHSEED": "0",
+               "PYTHONDONTWRITEBYTECODE": "1"}
+
+
+def _counted_child(side: int, family: str, code: str | None, lu: bool, out: str) -> None:
+    """Run under callgrind by :func:`instructions`: build the request, solve it between the two marker calls, and
+    write what the parent compares (iterations, cuts, port positions in the request's order) to ``out``."""
+    if code is not None:
+        sys.path.insert(0, code)
+    import contextlib
+
+    from plantsolve.solvers.alignment.solve import solve
+
+    req = _request(side, family, {"method": "direct"})
+    mode = contextlib.nullcontext()
+    if lu:
+        from plantsolve.solvers.alignment.kkt import use_schur
+        mode = use_schur(False)
+    os.getppid()
+    with mode:
+        solved = solve(req)
+    os.getpgrp()
+    res = getattr(solved, "result", solved)
+    by_id = {c.id: c for c in res.components}
+    cut = {frozenset((tuple(res.connections[k].from_), tuple(res.connections[k].to))) for k in res.cut_connections}
+    Path(out).write_text(json.dumps({
+        "components": len(req.components), "connections": len(req.connections), "iterations": res.iterations,
+        "cuts": len(res.cut_connections), "cut_set": sorted(tuple(sorted(x)) for x in cut),
+        "positions": [p.position for c in req.components for p in by_id[c.id].ports]}))
+
+
+def _counted(side: int, family: str, label: str, code: str | None, lu: bool, out_dir: Path) -> dict:
+    """One solve under ``valgrind --tool=callgrind``: its instruction count and what :func:`_counted_child` wrote."""
+    stem = out_dir / f"{family}-{side}-{label}"
+    for old in out_dir.glob(stem.name + ".callgrind*"):
+        old.unlink()
+    cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={stem}.callgrind", "--dump-instr=no",
+           f"--zero-before={CALLGRIND_ZERO}", f"--dump-before={CALLGRIND_DUMP}", sys.executable, str(Path(__file__)),
+           "--counted-child", str(side), "--family", family, "--child-out", f"{stem}.json"]
+    cmd += (["--before", code] if code else []) + (["--child-lu"] if lu else [])
+    t0 = time.perf_counter()
+    with open(f"{stem}.log", "w") as log:
+        subprocess.run(cmd, check=True, stdout=log, stderr=subprocess.STDOUT, env={**os.environ, **COUNTED_ENV})
+    dumps = sorted(out_dir.glob(stem.name + ".callgrind.*"))
+    if len(dumps) != 1:
+        raise RuntimeError(f"{stem}: {len(dumps)} dumps of the solve, expected one (see {stem}.log)")
+    found = re.search(r"^totals: (\d+)", dumps[0].read_text(), re.MULTILINE)
+    return {**json.loads(Path(f"{stem}.json").read_text()), "instructions": int(found.group(1)),
+            "wall_s": time.perf_counter() - t0, "profile": str(dumps[0])}
+
+
+def instructions(before: str | None, family: str, sides: list[int], codes: list[str] | None, out_dir: Path) -> None:
+    """Instruction counts of the direct method's solve under callgrind, this code beside its all-LU path and
+    ``before``, and the exponents of instructions ~ components^k between sizes."""
+    import numpy as np
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    runs = [("this", None, False), ("lu", None, True)] + ([("before", before, False)] if before else [])
+    runs = [r for r in runs if codes is None or r[0] in codes or r[0] == "this"]
+    print(f"\nDirect method, instructions of the solve under callgrind ({family}; k: exponent of instructions ~ "
+          "components^k since the size before; max |dP|: largest difference of a port position from 'this', mm; "
+          "same: the same connections cut as 'this')")
+    head = (f"{'code':>6} {'components':>10} {'G instr':>9} {'k instr':>7} {'iter':>5} {'max |dP|':>9} {'cuts':>4} "
+            f"{'same':>4} {'wall s':>7}  profile")
+    print(head)
+    print("-" * len(head))
+    rows: dict[str, list[dict]] = {}
+    for side in sides:
+        here = None
+        for label, code, lu in runs:
+            r = _counted(side, family, label, code, lu, out_dir)
+            pos = np.array(r.pop("positions"))
+            here = here or {**r, "P": pos}
+            dp = float(np.max(np.abs(pos - here["P"]))) if pos.shape == here["P"].shape else float("nan")
+            same = "yes" if r["cut_set"] == here["cut_set"] else "NO"
+            prev = rows.get(label, [None])[-1]
+            rows.setdefault(label, []).append(r)
+            print(f"{label:>6} {r['components']:>10} {r['instructions'] / 1e9:>9.3f} "
+                  f"{_exponent(prev, r, 'instructions'):>7} {r['iterations']:>5} {dp:>9.1e} {r['cuts']:>4} {same:>4} "
+                  f"{r['wall_s']:>7.0f}  {r['profile']}", flush=True)
+    if len(sides) > 2:
+        for label, found in rows.items():
+            print(f"  {label}: first to last k instr {_exponent(found[0], found[-1], 'instructions')}")
+    print("G instr: instructions of the solve alone (callgrind's count from the solve's first call to its return, the "
+          "request built before), one thread, PYTHONHASHSEED=0; wall s: the whole child under callgrind.")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="only 100 and 1,000 components; scaling up to 10,000")
@@ -427,7 +537,21 @@ def main() -> None:
     ap.add_argument("--steps", action="store_true",
                     help="this code's KKT solves per stage and phase (Gauss-Newton and refinement steps)")
     ap.add_argument("--conflicts", action="store_true", help="only the cut choice on 360 small synthetic conflicts")
+    ap.add_argument("--instructions", action="store_true",
+                    help="only instruction counts of the direct method's solve under callgrind (default --side 46 92)")
+    ap.add_argument("--callgrind-dir", default="/tmp/alignment-callgrind",
+                    help="where --instructions keeps callgrind's profiles")
+    ap.add_argument("--counted-child", type=int, metavar="SIDE", help=argparse.SUPPRESS)
+    ap.add_argument("--child-lu", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--child-out", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.counted_child is not None:
+        _counted_child(args.counted_child, (args.family or ["plant"])[0], args.before, args.child_lu, args.child_out)
+        return
+    if args.instructions:
+        for family in args.family or ("plant",):
+            instructions(args.before, family, args.side or [46, 92], args.code, Path(args.callgrind_dir))
+        return
     if args.conflicts:
         conflicts(args.before)
         return
@@ -450,7 +574,7 @@ def methods(quick: bool, dq_iterations: int) -> None:
             r = run_case(SIZES[size], method, dq_iterations)
             tgt = targets[size]
             mark = "" if tgt is None else ("ok" if r["wall_s"] < tgt else "MISS")
-            print(f"{r['components']:>10} {method:>15} {str(r['converged']):>5} {r['iterations']:>6} {r['wall_s']:>8.2f} "
+            print(f"{r['components']:>10} {method:>15} {r['converged']!s:>5} {r['iterations']:>6} {r['wall_s']:>8.2f} "
                   f"{mark:>7} {r['peak_mib']:>9.1f} {r['max_gap']:>9.2e} {r['solver_residual']:>9.2e} "
                   f"{r['pipe_axis_mean']:>9.3f} {r['fitting_mean']:>8.3f} {r['cuts']:>4}  {r['stop']}", flush=True)
     print("\nmax gap: largest gap left in the result (mm); residual*: solver residual that was snapped to "
