@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from kill_scenarios import HERE, JOB_SECONDS, Service, _forkservers, _stray, _what  # noqa: E402
+from kill_scenarios import HERE, JOB_SECONDS, Service, _forkservers, _stray, _what
 
 SCENARIOS = "api-stop,warm-stop-busy,two-apis-first,api-kill-twice,api-term,warm-uploads,sqlite-deleted"
 
