@@ -19,6 +19,7 @@ from plantsolve.jobs.lifecycle import QUEUED, RUNNING, is_finished
 from plantsolve.jobs.reader_notes import held, with_reader_warnings
 from plantsolve.jobs.runner import lost_worker_report, tidy_ended
 from plantsolve.store.blobs import LocalBlobStore
+from plantsolve.store.disk import check_free_space
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import LapsedAttempt, as_utc
 
@@ -116,7 +117,7 @@ def abandoned(ctx: ServiceContext, job_id: uuid.UUID, worker: str, alive_seconds
 
 
 def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None, *,
-               after_outage: bool = False, gone: Gone | None = None) -> None:
+               after_outage: bool = False, gone: Gone | None = None) -> bool:
     """One pass. Running attempts whose lease lapsed are lost (:func:`lose_attempt`). Queued jobs are enqueued
     again when their message never reached the broker (``enqueued_at`` unset), or when it is older than
     ``requeue_queued_after`` and the broker holds fewer messages than there are such jobs (the oldest first: a
@@ -130,7 +131,10 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
 
     ``gone``: the transport's word that a worker no longer runs (a job process of a service that was killed and
     started again on this host): its attempt is lost now, without waiting for its lease to lapse, so the job is not
-    shown running for a lease while nothing runs it."""
+    shown running for a lease while nothing runs it.
+
+    Returns whether lapsed leases were judged: False while the database's disk is low (:func:`heartbeats_may_fail`),
+    and the caller's next pass is then one ``after_outage``."""
     requeued: list[uuid.UUID] = []
     failed = 0
     if gone is not None:
@@ -145,7 +149,8 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
         if extended:
             log.warning("sweeper: the database was away; %d running lease(s) extended instead of lapsing", extended)
     now = utcnow()
-    for lost in ctx.repo.lapsed(now):
+    refused = heartbeats_may_fail(ctx)
+    for lost in [] if refused else ctx.repo.lapsed(now):
         beat = lost.heartbeat_at.isoformat() if lost.heartbeat_at else "the start"
         fate = lose_attempt(ctx, lost, why=f"no heartbeat since {beat}", lapsed_before=now)
         if fate == "requeued":
@@ -174,6 +179,22 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
         sent += 1
     if sent or failed:
         log.info("sweeper: enqueued %d again, failed %d", sent, failed)
+    return not refused
+
+
+def heartbeats_may_fail(ctx: ServiceContext) -> str | None:
+    """Why a lapsed lease would say nothing about its worker now though the database takes the write lock (as the
+    sweeper checks): the SQLite file's disk is below ``MIN_FREE_DISK_BYTES``. On a full disk SQLite still takes and
+    gives back the lock, but every heartbeat meets SQLITE_FULL; sweeping the leases that lapsed meanwhile lost each
+    running attempt and solved its job again once space returned. None when leases can be judged (PostgreSQL's disk
+    is the server's, and a write it refuses fails the pass)."""
+    if ctx.db.file is None:
+        return None
+    try:
+        check_free_space({"database": ctx.db.file.path.parent}, ctx.store.min_free_disk_bytes)
+    except OSError as error:  # DiskLow, or free space that cannot be read (a stale network mount)
+        return str(error)
+    return None
 
 
 def resume(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None, gone: Gone | None = None) -> None:

@@ -78,15 +78,17 @@ class Sweeper:
         first (see :func:`plantsolve.jobs.leases.sweep_once`). A pass first checks that the database takes a write
         (as readiness does): while it takes none (a SQLite file whose write lock another process holds, a read-only
         standby) nobody's heartbeat is written either, though the pass's reads go on and may find nothing to write;
-        such a pass fails, so that the leases that lapse meanwhile are extended, not swept. Returns whether the pass
-        succeeded."""
+        such a pass fails, so that the leases that lapse meanwhile are extended, not swept; so does one that judged no
+        lease (the database's disk is low). Returns whether the pass succeeded."""
         try:
             self.ctx.db.ping()
-            sweep_once(self.ctx, self.enqueue, self.pending, after_outage=self._failed, gone=self.gone)
-            self._failed = False
+            judged = sweep_once(self.ctx, self.enqueue, self.pending, after_outage=self._failed, gone=self.gone)
+            if not judged and not self._failed:
+                log.warning("the database's disk is low: leases that lapse are extended once it has room, not swept")
+            self._failed = not judged
             if self.after_pass is not None:
                 self.after_pass()
-            return True
+            return judged
         except Exception as error:
             self._failed = True
             log.warning("sweep failed (%s): the next pass extends running leases", type(error).__name__,
