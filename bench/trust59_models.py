@@ -19,25 +19,15 @@ import random
 import re
 import struct
 import sys
-from pathlib import Path
 
 import mistakes_table as table  # bench/, the script's folder, is first on sys.path; one BLAS thread
+import trust58_models  # its judge and child run this round's cases
+from trust58_models import POLY, RIG, ROOT, _replace_once, _text
 
-ROOT = Path(__file__).resolve().parent.parent  # the inputs come from this tree, whichever tree reads them
-POLY, RIG = ROOT / "tests/solvers/polyhedra/data", ROOT / "tests/solvers/rigidity/omr"
 IN = 1 / 0.0254
 LEGIT = "legit:"  # a file nothing is wrong with: its right outcome is no word beyond the clean file's
 # but for the notes its own content calls for (a multiplier applied, a trailer missing after the data's end)
 LEGIT_NOTES = {"zone_multipliers_applied", "truncated_file"}
-
-
-def _text(path: Path | str) -> str:
-    return (ROOT / path).read_text(encoding="utf-8", errors="replace")
-
-
-def _replace_once(text: str, old: str, new: str) -> str:
-    assert old in text, old
-    return text.replace(old, new, 1)
 
 
 def _box_stl_binary(dx: float, dy: float, dz: float) -> bytes:
@@ -328,9 +318,6 @@ CASES = {"polyhedra": polyhedra_cases, "rigidity": rigidity_cases, "dedup": dedu
 
 def child(kinds: list[str], only: list[str] | None) -> None:
     sys.path.insert(0, os.getcwd())
-    sys.path.insert(0, str(ROOT / "bench"))
-    import trust58_models  # the tree's own judge and runner (both trees have it)
-
     trust58_models.CASES = CASES
     trust58_models.child(kinds, only)
 
