@@ -26,8 +26,16 @@ from mistakes_table import (  # bench/, the script's folder, is first on sys.pat
     child_script,
     compare,
 )
-from trust51t_mistakes import INCH, TUBE_RADIUS, _npy, _scale_pcf, judge_tube, tube_points, xyz
-
+from trust51t_mistakes import (
+    INCH,
+    TUBE_RADIUS,
+    _npy,
+    _scale_pcf,
+    judge_alignment,  # noqa: F401 - the child calls it as m.judge_alignment
+    judge_tube,
+    tube_points,
+    xyz,
+)
 
 
 def tube_cases():

@@ -21,19 +21,16 @@ read to other numbers; its job's summary beside it when it differs).
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import json
 import os
 import random
 import re
-import subprocess
 import sys
 import time
 from pathlib import Path
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
+import mistakes_table as table  # bench/, the script's folder, is first on sys.path; one BLAS thread
 
 ROOT = Path(__file__).resolve().parent.parent  # the inputs come from this tree, whichever tree reads them
 
@@ -402,21 +399,34 @@ def rigidity_cases() -> list[Case]:
     ]
 
 
-def flowmeter_cases() -> list[Case]:
+def _json_edited(body: dict, **changes) -> bytes:
+    """``body`` as JSON with each of ``changes`` set (``pipe__radius`` for ``body["pipe"]["radius"]``)."""
+    body = json.loads(json.dumps(body))
+    for path, value in changes.items():
+        node = body
+        steps = path.split("__")
+        for step in steps[:-1]:
+            node = node[step]
+        node[steps[-1]] = value
+    return json.dumps(body).encode()
+
+
+def _flowmeter_inputs() -> tuple[dict, str, dict]:
+    """The example flowmeter request, its field file's text, and the request with that file for its uniform field."""
     meter = json.loads(_text("examples/flowmeter/meter.json"))
     comsol = _text("examples/flowmeter/magnet_comsol.txt")
-
-    def changed(path, value, body=None):
-        body = json.loads(json.dumps(body or meter))
-        node = body
-        for step in path[:-1]:
-            node = node[step]
-        node[path[-1]] = value
-        return json.dumps(body).encode()
-
     with_file = json.loads(json.dumps(meter))
     with_file.pop("magnetic_field")
     with_file["options"]["magnetic_field_file"] = comsol
+    return meter, comsol, with_file
+
+
+def flowmeter_cases() -> list[Case]:
+    meter, comsol, with_file = _flowmeter_inputs()
+
+    def changed(path, value, body=None):
+        return _json_edited(body or meter, **{"__".join(path): value})
+
     data_rows = [i for i, line in enumerate(comsol.splitlines()) if not line.startswith("%")]
     field_lines = comsol.splitlines()
     shuffled_field = field_lines[:data_rows[0]] + random.Random(57).sample(field_lines[data_rows[0]:],
@@ -634,55 +644,27 @@ def child(kinds: list[str], only: list[str] | None = None) -> None:
                 print(json.dumps(row), flush=True)
 
 
-def run(tree: Path, kinds: list[str], only: list[str] | None = None) -> list[dict]:
-    """The rows of one tree, run in a child process with that tree's code first on sys.path."""
-    done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds, *(["--cases", *only] if only else [])],
-                          cwd=tree, capture_output=True,
-                          text=True, env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"},
-                          check=False)
-    if done.returncode:
-        sys.stderr.write(done.stderr[-3000:])
-    return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+LOOK = ("500", "CRASH", "NO WORD", "OTHER READING", "job failed")
 
 
-def _saved(path: str, kinds: list[str]) -> list[dict]:
-    rows = [json.loads(line) for line in Path(path).read_text().splitlines() if line.startswith("{")]
-    return [row for row in rows if row["kind"] in kinds]
+def _looked_at(rows: list[dict]) -> str:
+    counts = ", ".join(f"{w} {sum(r['outcome'].startswith(w) for r in rows)}" for w in LOOK)
+    flagged = sum(any(row["outcome"].startswith(w) for w in LOOK) for row in rows)
+    return f"{len(rows)} cases, {flagged} to look at ({counts})"
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--kinds", nargs="*", default=list(CASES))
-    parser.add_argument("--cases", nargs="*", default=None, help="only the mistakes whose names hold one of these")
-    parser.add_argument("--ref", default=None, help="a checkout to run beside this tree (the branch's start)")
-    parser.add_argument("--ref-rows", default=None, help="the reference's rows saved from an earlier run (--child)")
-    parser.add_argument("--rows", default=None, help="this tree's rows saved from an earlier run (--child)")
-    parser.add_argument("--child", action="store_true", help="print this tree's rows as JSON lines, no table")
-    args = parser.parse_args()
+    args = table.arguments(__doc__, kinds=CASES).parse_args()
     if args.child:
         sys.path.insert(0, os.getcwd())
         child(args.kinds, args.cases)
         return
     t0 = time.time()
-    after = _saved(args.rows, args.kinds) if args.rows else run(ROOT, args.kinds, args.cases)
-    before = run(Path(args.ref), args.kinds, args.cases) if args.ref else []
-    if args.ref_rows:
-        before = _saved(args.ref_rows, args.kinds)
-    look = ("500", "CRASH", "NO WORD", "OTHER READING", "job failed")
-    print("| kind | mistake | " + ("before | " if before else "") + "HTTP | outcome | message excerpt |")
-    print("| --- | --- | " + ("--- | " if before else "") + "--- | --- | --- |")
-    earlier = {(row["kind"], row["mistake"]): row for row in before}
-    for row in after:
-        was = earlier.get((row["kind"], row["mistake"]))
-        cell = f"{was['status']} {was['outcome']} | " if was else ("- | " if before else "")
-        said = row["said"].replace("|", "/").replace("\n", " ")[:110]
-        print(f"| {row['kind']} | {row['mistake']} | {cell}{row['status']} | {row['outcome']} | {said} |")
-    for label, rows in (("before", before), ("after", after)):
-        if rows:
-            counts = ", ".join(f"{w} {sum(r['outcome'].startswith(w) for r in rows)}" for w in look)
-            flagged = sum(any(row["outcome"].startswith(w) for w in look) for row in rows)
-            print(f"{label}: {len(rows)} cases, {flagged} to look at ({counts})")
-    print(f"wall {time.time() - t0:.0f} s")
+    trees = table.trees(args, __file__)
+    table.markdown(trees, ["kind", "mistake", "HTTP", "outcome", "message excerpt"],
+                   lambda r: [r["kind"], r["mistake"], str(r["status"]), r["outcome"], table.excerpt(r["said"], 110)],
+                   lambda was: f"{was['status']} {was['outcome']}")
+    table.counts(trees, _looked_at, t0)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,6 @@ The outcome column: ``refused``, ``scaled``/``same``, ``warned <codes>``, and th
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import random
@@ -27,8 +26,7 @@ import sys
 import time
 from pathlib import Path
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
+import mistakes_table as table  # bench/, the script's folder, is first on sys.path; one BLAS thread
 
 ROOT = Path(__file__).resolve().parent.parent  # the inputs come from this tree, whichever tree reads them
 POLY, RIG = ROOT / "tests/solvers/polyhedra/data", ROOT / "tests/solvers/rigidity/omr"
@@ -335,47 +333,29 @@ def intake_cpu(trees: list[Path], points: int = 1_500_000) -> None:
             print(f"| {tree} | {int(size) / 1e6:.1f} | {float(cpu):.3f} | {float(rss):.0f} |")
 
 
-def run(tree: Path, kinds: list[str], only: list[str] | None) -> list[dict]:
-    done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds, *(["--cases", *only] if only else [])],
-                          cwd=tree, capture_output=True, text=True, check=False,
-                          env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"})
-    if done.returncode:
-        sys.stderr.write(done.stderr[-3000:])
-    return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+def _looked_at(rows: list[dict]) -> str:
+    look = ("500", "CRASH", "NO WORD", "OTHER ANSWER", "job ", "failed (")  # failed: refused only after the 202
+    return f"{len(rows)} cases, {sum(r['outcome'].startswith(look) for r in rows)} to look at"
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--kinds", nargs="*", default=list(CASES))
-    parser.add_argument("--cases", nargs="*", default=None, help="only the mistakes whose names hold one of these")
-    parser.add_argument("--ref", default=None, help="a checkout to run beside this tree (the branch's start)")
-    parser.add_argument("--child", action="store_true", help="print this tree's rows as JSON lines, no table")
+    parser = table.arguments(__doc__, kinds=CASES)
     parser.add_argument("--intake-cpu", action="store_true", help="dedup's submission check's CPU on a 60 MB model")
     args = parser.parse_args()
     if args.intake_cpu:
-        intake_cpu([ROOT] + ([Path(args.ref)] if args.ref else []))
+        intake_cpu([ROOT] + [Path(ref) for ref in args.ref])
         return
     if args.child:
         sys.path.insert(0, os.getcwd())
         child(args.kinds, args.cases)
         return
     t0 = time.time()
-    after = run(ROOT, args.kinds, args.cases)
-    before = {(r["kind"], r["mistake"]): r for r in run(Path(args.ref), args.kinds, args.cases)} if args.ref else {}
-    print("| kind | mistake | " + ("before | " if before else "") + "HTTP | outcome | answer / message excerpt |")
-    print("| --- | --- | " + ("--- | " if before else "") + "--- | --- | --- |")
-    for row in after:
-        was = before.get((row["kind"], row["mistake"]))
-        cell = (f"{was['status']} {was['outcome']} | " if was else "- | ") if before else ""
-        said = (json.dumps(row["answer"]) + " " if "answer" in row else "") + row["said"]
-        print(f"| {row['kind']} | {row['mistake']} | {cell}{row['status']} | {row['outcome']} | "
-              f"{said.replace('|', '/').replace(chr(10), ' ')[:140]} |")
-    look = ("500", "CRASH", "NO WORD", "OTHER ANSWER", "job ", "failed (")  # failed: refused only after the 202
-    for label, rows in (("before", list(before.values())), ("after", after)):
-        if rows:
-            flagged = sum(r["outcome"].startswith(look) for r in rows)
-            print(f"{label}: {len(rows)} cases, {flagged} to look at")
-    print(f"wall {time.time() - t0:.0f} s")
+    trees = table.trees(args, __file__)
+    table.markdown(trees, ["kind", "mistake", "HTTP", "outcome", "answer / message excerpt"],
+                   lambda r: [r["kind"], r["mistake"], str(r["status"]), r["outcome"],
+                              table.excerpt((json.dumps(r["answer"]) + " " if "answer" in r else "") + r["said"], 140)],
+                   lambda was: f"{was['status']} {was['outcome']}")
+    table.counts(trees, _looked_at, t0)
 
 
 if __name__ == "__main__":

@@ -21,24 +21,27 @@ Outcome column: ``422 <loc>`` (refused, where it says), ``warned <codes>``, ``ri
 
 from __future__ import annotations
 
-import argparse
 import io
 import json
 import os
 import random
 import re
-import subprocess
 import sys
 import time
 from pathlib import Path
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
-
 ROOT = Path(__file__).resolve().parent.parent  # the inputs come from this tree, whichever tree reads them
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from trust57_mistakes import _canonical, _said, _utf16, _xlsx  # noqa: E402
+import mistakes_table as table  # one BLAS thread, before numpy
+from trust57_mistakes import (
+    _canonical,
+    _flowmeter_inputs,
+    _json_edited,
+    _said,
+    _utf16,
+    _xlsx,
+)
 
 
 def _text(path: str) -> str:
@@ -204,27 +207,12 @@ def perfmap_cases() -> list[tuple]:
     return cases
 
 
-def _field(comsol: str, change) -> str:
-    return change(comsol)
-
-
 def flowmeter_cases() -> list[tuple]:
-    meter = json.loads(_text("examples/flowmeter/meter.json"))
-    comsol = _text("examples/flowmeter/magnet_comsol.txt")
+    meter, comsol, with_file = _flowmeter_inputs()
 
     def request(body=None, **changes) -> bytes:
-        body = json.loads(json.dumps(body or meter))
-        for path, value in changes.items():
-            node = body
-            steps = path.split("__")
-            for step in steps[:-1]:
-                node = node[step]
-            node[steps[-1]] = value
-        return json.dumps(body).encode()
+        return _json_edited(body or meter, **changes)
 
-    with_file = json.loads(json.dumps(meter))
-    with_file.pop("magnetic_field")
-    with_file["options"]["magnetic_field_file"] = comsol
     no_length = re.sub(r"% Length unit:.*\n", "", comsol)
     no_tesla = comsol.replace(" (T)", "")
     neither = re.sub(r"% Length unit:.*\n", "", no_tesla)
@@ -339,7 +327,6 @@ def child(kinds: list[str], only: list[str] | None = None) -> None:
                     options = {"map": False, **(options or {})}
                 status, view, doc = job(kind, name, data, options)
                 row = {"kind": kind, "mistake": mistake, "status": status}
-                key = (kind, mistake.split()[1] if mistake.startswith("clean") else "")
                 if status != 202:
                     errors = doc.get("errors") or []
                     loc = ".".join(map(str, errors[0].get("loc", []))) if errors else ""
@@ -376,54 +363,28 @@ def child(kinds: list[str], only: list[str] | None = None) -> None:
                 print(json.dumps(row), flush=True)
 
 
-def run(tree: Path, kinds: list[str]) -> list[dict]:
-    done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds], cwd=tree, capture_output=True,
-                          text=True, env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"},
-                          check=False)
-    if done.returncode:
-        sys.stderr.write(done.stderr[-3000:])
-    return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+def _failed(rows: list[dict]) -> str:
+    bad = [r for r in rows if r["outcome"].startswith(("WRONG", "500", "CRASH", "job"))]
+    return f"{len(rows)} cases, {len(bad)} WRONG/500/CRASH/failed"
 
 
-def _saved(path: str) -> list[dict]:
-    """Rows saved from --child runs, the last of each case counting (a case run again after a change)."""
-    rows = {}
-    for line in Path(path).read_text().splitlines():
-        if line.startswith("{"):
-            row = json.loads(line)
-            rows[(row["kind"], row["mistake"])] = row
-    return list(rows.values())
+def side_by_side(args, script: str) -> None:
+    """The table of ``script``'s rows (this bench's, or trust59_perfflow's) in each tree."""
+    t0 = time.time()
+    trees = table.trees(args, script)
+    table.markdown(trees, ["kind", "case", "after", "message excerpt"],
+                   lambda r: [r["kind"], r["mistake"], r["outcome"], table.excerpt(r["said"], 100)],
+                   lambda was: was["outcome"])
+    table.counts(trees, _failed, t0)
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--kinds", nargs="*", default=list(CASES))
-    parser.add_argument("--ref", default=None, help="a checkout to run beside this tree (the branch's start)")
-    parser.add_argument("--child", action="store_true", help="print this tree's rows as JSON lines, no table")
-    parser.add_argument("--cases", nargs="*", default=None, help="only the cases whose names hold one of these")
-    parser.add_argument("--ref-rows", default=None, help="the reference tree's rows saved by --child")
-    parser.add_argument("--rows", default=None, help="this tree's rows saved by --child")
-    args = parser.parse_args()
+    args = table.arguments(__doc__, kinds=CASES).parse_args()
     if args.child:
         sys.path.insert(0, os.getcwd())
         child(args.kinds, args.cases)
         return
-    t0 = time.time()
-    after = _saved(args.rows) if args.rows else run(ROOT, args.kinds)
-    before = {(r["kind"], r["mistake"]): r for r in (
-        _saved(args.ref_rows) if args.ref_rows else run(Path(args.ref), args.kinds) if args.ref else [])}
-    print("| kind | case | " + ("before | " if before else "") + "after | message excerpt |")
-    print("| --- | --- | " + ("--- | " if before else "") + "--- | --- |")
-    for row in after:
-        was = before.get((row["kind"], row["mistake"]))
-        cell = f"{was['outcome']} | " if was else ("- | " if before else "")
-        said = row["said"].replace("|", "/").replace("\n", " ")[:100]
-        print(f"| {row['kind']} | {row['mistake']} | {cell}{row['outcome']} | {said} |")
-    for label, rows in (("before", list(before.values())), ("after", after)):
-        if rows:
-            bad = [r for r in rows if r["outcome"].startswith(("WRONG", "500", "CRASH", "job"))]
-            print(f"{label}: {len(rows)} cases, {len(bad)} WRONG/500/CRASH/failed")
-    print(f"wall {time.time() - t0:.0f} s")
+    side_by_side(args, __file__)
 
 
 if __name__ == "__main__":

@@ -13,15 +13,10 @@ a child process of its own, its code first on ``sys.path``): what each answers, 
 
 from __future__ import annotations
 
-import argparse
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
+import mistakes_table as table  # bench/, the script's folder, is first on sys.path; one BLAS thread
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
@@ -177,34 +172,17 @@ def _inspection_cases():
                 colours[-1], colours[-1])
 
 
-def child() -> None:
-    for group in (_order_cases, _radius_cases, _units_cases, _inspection_cases):
-        for case, said in group():
-            print(json.dumps({"case": case, "said": said}), flush=True)
-
-
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--ref", default=None, help="a checkout to answer beside this tree (main's worktree)")
-    parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = table.arguments(__doc__, cases=False).parse_args()
     if args.child:
-        child()
+        table.case_lines((_order_cases, _radius_cases, _units_cases, _inspection_cases))
         return
-    trees = ([("before", args.ref)] if args.ref else []) + [("after", str(ROOT))]
-    answers = {}
-    for label, tree in trees:  # the tree's plantsolve first on the path; the inputs are this tree's
-        done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--child"], cwd=tree,
-                              capture_output=True, text=True, check=False,
-                              env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "PYTHONPATH": tree})
-        if done.returncode:
-            sys.stderr.write(done.stderr[-2000:])
-        answers[label] = {row["case"]: row["said"] for row in map(json.loads, done.stdout.splitlines())}
-    cases = list(answers["after"])
-    width = max(map(len, cases))
+    trees = table.trees(args, __file__, key=table.by_case)
+    answers = {label: {row["case"]: row["said"] for row in rows} for label, rows in trees}
+    width = max(len(row["case"]) for row in trees[-1][1])
     print(f"{'case':{width}s} | " + " | ".join(label for label, _ in trees))
-    for case in cases:
-        print(f"{case:{width}s} | " + " | ".join(answers[label].get(case, "-") for label, _ in trees))
+    for row in trees[-1][1]:
+        print(f"{row['case']:{width}s} | " + " | ".join(answers[label].get(row["case"], "-") for label, _ in trees))
 
 
 if __name__ == "__main__":

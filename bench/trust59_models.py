@@ -13,34 +13,21 @@ Rows ``legit: …`` are files nothing is wrong with: ``quiet (right)``, or ``FAL
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import random
 import re
 import struct
-import subprocess
 import sys
-from pathlib import Path
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
+import mistakes_table as table  # bench/, the script's folder, is first on sys.path; one BLAS thread
+import trust58_models  # its judge and child run this round's cases
+from trust58_models import POLY, RIG, ROOT, _replace_once, _text
 
-ROOT = Path(__file__).resolve().parent.parent  # the inputs come from this tree, whichever tree reads them
-POLY, RIG = ROOT / "tests/solvers/polyhedra/data", ROOT / "tests/solvers/rigidity/omr"
 IN = 1 / 0.0254
 LEGIT = "legit:"  # a file nothing is wrong with: its right outcome is no word beyond the clean file's
 # but for the notes its own content calls for (a multiplier applied, a trailer missing after the data's end)
 LEGIT_NOTES = {"zone_multipliers_applied", "truncated_file"}
-
-
-def _text(path: Path | str) -> str:
-    return (ROOT / path).read_text(encoding="utf-8", errors="replace")
-
-
-def _replace_once(text: str, old: str, new: str) -> str:
-    assert old in text, old
-    return text.replace(old, new, 1)
 
 
 def _box_stl_binary(dx: float, dy: float, dz: float) -> bytes:
@@ -331,42 +318,20 @@ CASES = {"polyhedra": polyhedra_cases, "rigidity": rigidity_cases, "dedup": dedu
 
 def child(kinds: list[str], only: list[str] | None) -> None:
     sys.path.insert(0, os.getcwd())
-    sys.path.insert(0, str(ROOT / "bench"))
-    import trust58_models  # the tree's own judge and runner (both trees have it)
-
     trust58_models.CASES = CASES
     trust58_models.child(kinds, only)
 
 
-def run(tree: Path, kinds: list[str], only: list[str] | None) -> list[dict]:
-    done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds,
-                           *(["--cases", *only] if only else [])], cwd=tree, capture_output=True, text=True,
-                          check=False, env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"})
-    if done.returncode:
-        sys.stderr.write(done.stderr[-3000:])
-    return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-
-
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--kinds", nargs="*", default=list(CASES))
-    parser.add_argument("--cases", nargs="*", default=None, help="only the mistakes whose names hold one of these")
-    parser.add_argument("--ref", nargs="*", default=[], help="checkouts to run beside this tree (main, the branch's "
-                        "start), a column each")
-    parser.add_argument("--child", action="store_true", help="print this tree's rows as JSON lines, no table")
-    args = parser.parse_args()
+    args = table.arguments(__doc__, kinds=CASES).parse_args()
     if args.child:
         child(args.kinds, args.cases)
         return
-    mine = run(ROOT, args.kinds, args.cases)
-    refs = [{(r["kind"], r["mistake"]): r for r in run(Path(tree), args.kinds, args.cases)} for tree in args.ref]
-    print("| kind | mistake | " + "".join(f"{Path(tree).name} | " for tree in args.ref) + "this tree | what it says |")
-    print("| --- | --- | " + "--- | " * len(args.ref) + "--- | --- |")
-    for r in mine:
-        said = str(r.get("said", ""))[:140].replace("|", "/").replace("\n", " ")
-        print(f"| {r['kind']} | {r['mistake']} | "
-              + "".join(f"{_legit(r['mistake'], ref.get((r['kind'], r['mistake']), {}).get('outcome', '-'))} | "
-                        for ref in refs) + f"{_legit(r['mistake'], r['outcome'])} | {said} |")
+    trees = table.trees(args, __file__, mine="this tree", before=None)
+    table.markdown(trees, ["kind", "mistake", "this tree", "what it says"],
+                   lambda r: [r["kind"], r["mistake"], _legit(r["mistake"], r["outcome"]),
+                              table.excerpt(r.get("said", ""), 140)],
+                   lambda ref: _legit(ref["mistake"], ref["outcome"]))
 
 
 def _legit(mistake: str, outcome: str) -> str:

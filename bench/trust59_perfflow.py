@@ -15,23 +15,18 @@ confident wrong answer).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import random
-import subprocess
 import sys
-import time
 from pathlib import Path
-
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import mistakes_table as table  # one BLAS thread, before numpy
 import trust58_perfflow as base
-from trust57_mistakes import _xlsx
+from trust57_mistakes import _flowmeter_inputs, _json_edited, _xlsx
 from trust58_perfflow import _columns, _speed_csv, _text, _xlsx_cells
 
 
@@ -162,22 +157,11 @@ def perfmap_cases() -> list[tuple]:
 
 
 def flowmeter_cases() -> list[tuple]:
-    meter = json.loads(_text("examples/flowmeter/meter.json"))
-    comsol = _text("examples/flowmeter/magnet_comsol.txt")
+    meter, _, with_file = _flowmeter_inputs()
 
     def request(body=None, **changes) -> bytes:
-        body = json.loads(json.dumps(body or meter))
-        for path, value in changes.items():
-            node = body
-            steps = path.split("__")
-            for step in steps[:-1]:
-                node = node[step]
-            node[steps[-1]] = value
-        return json.dumps(body).encode()
+        return _json_edited(body or meter, **changes)
 
-    with_file = json.loads(json.dumps(meter))
-    with_file.pop("magnetic_field")
-    with_file["options"]["magnetic_field_file"] = comsol
     ifc = _text("examples/dedup/zoo_ifc2x3.ifc")
     return [
         ("flowmeter", "clean meter.json", "meter.json", json.dumps(meter).encode(), None, "same", None),
@@ -210,22 +194,8 @@ def flowmeter_cases() -> list[tuple]:
 CASES = {"perfmap": perfmap_cases, "flowmeter": flowmeter_cases}
 
 
-def run(tree: Path, kinds: list[str], only: list[str] | None) -> list[dict]:
-    done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds, *(["--cases", *only] if only else [])],
-                          cwd=tree, capture_output=True, text=True,
-                          env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"}, check=False)
-    if done.returncode:
-        sys.stderr.write(done.stderr[-3000:])
-    return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-
-
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--kinds", nargs="*", default=list(CASES))
-    parser.add_argument("--ref", default=None, help="a checkout to run beside this tree (the branch's start)")
-    parser.add_argument("--child", action="store_true", help="print this tree's rows as JSON lines, no table")
-    parser.add_argument("--cases", nargs="*", default=None, help="only the cases whose names hold one of these")
-    args = parser.parse_args()
+    args = table.arguments(__doc__, kinds=CASES).parse_args()
     if args.child:
         sys.path.insert(0, os.getcwd())
         base.CASES = CASES  # trust58's driver, this round's cases
@@ -233,21 +203,7 @@ def main() -> None:
         if "perfmap" in args.kinds and not args.cases:
             exports_rows()
         return
-    t0 = time.time()
-    after = run(ROOT, args.kinds, args.cases)
-    before = {(r["kind"], r["mistake"]): r for r in (run(Path(args.ref), args.kinds, args.cases) if args.ref else [])}
-    print("| kind | case | " + ("before | " if before else "") + "after | message excerpt |")
-    print("| --- | --- | " + ("--- | " if before else "") + "--- | --- |")
-    for row in after:
-        was = before.get((row["kind"], row["mistake"]))
-        cell = f"{was['outcome']} | " if was else ("- | " if before else "")
-        said = row["said"].replace("|", "/").replace("\n", " ")[:100]
-        print(f"| {row['kind']} | {row['mistake']} | {cell}{row['outcome']} | {said} |")
-    for label, rows in (("before", list(before.values())), ("after", after)):
-        if rows:
-            bad = [r for r in rows if r["outcome"].startswith(("WRONG", "500", "CRASH", "job"))]
-            print(f"{label}: {len(rows)} cases, {len(bad)} WRONG/500/CRASH/failed")
-    print(f"wall {time.time() - t0:.0f} s")
+    base.side_by_side(args, __file__)
 
 
 if __name__ == "__main__":

@@ -21,15 +21,11 @@ a word or two.
 
 from __future__ import annotations
 
-import argparse
 import json
-import os
-import subprocess
-import sys
+import logging
 from pathlib import Path
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
+import mistakes_table as table  # bench/, the script's folder, is first on sys.path; one BLAS thread
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -258,39 +254,16 @@ def _inspection_cases():
                                                            + (f" ({', '.join(codes)})" if codes else ""))
 
 
-def child() -> None:
-    import logging
-
-    logging.disable(logging.WARNING)
-    for group in (_pcf_cases, _mesh_cases, _ply_cases, _option_cases, _column_cases, _review_column_cases,
-                  _inspection_cases):
-        for case, said in group():
-            print(json.dumps({"case": case, "said": said}), flush=True)
-
-
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--ref", action="append", default=[],
-                        help="a checkout to answer beside this tree (main's worktree); may be given more than once")
-    parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = table.arguments(__doc__, cases=False).parse_args()
     if args.child:
-        child()
+        logging.disable(logging.WARNING)
+        table.case_lines((_pcf_cases, _mesh_cases, _ply_cases, _option_cases, _column_cases, _review_column_cases,
+                          _inspection_cases))
         return
-    trees = [(Path(ref).name, ref) for ref in args.ref] + [("this tree", str(ROOT))]
-    answers = {}
-    for label, tree in trees:  # the tree's plantsolve first on the path; the inputs are this script's
-        done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--child"], cwd=tree,
-                              capture_output=True, text=True, check=False,
-                              env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "PYTHONPATH": tree})
-        if done.returncode:
-            sys.stderr.write(done.stderr[-2000:])
-        answers[label] = {row["case"]: row["said"] for row in map(json.loads, done.stdout.splitlines())}
-    cases = list(answers["this tree"])
-    print("| case | " + " | ".join(label for label, _ in trees) + " |")
-    print("| --- | " + " | ".join("---" for _ in trees) + " |")
-    for case in cases:
-        print(f"| {case} | " + " | ".join(answers[label].get(case, "-") for label, _ in trees) + " |")
+    trees = table.trees(args, __file__, key=table.by_case, mine="this tree", before=None)
+    table.markdown(trees, ["case", "this tree"], lambda r: [r["case"], r["said"]], lambda ref: ref["said"], at=1,
+                   key=table.by_case)
 
 
 if __name__ == "__main__":
