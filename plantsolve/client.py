@@ -38,8 +38,9 @@ FINISHED = ("succeeded", "failed", "cancelled")
 # plantsolve/schemas/common.py VERDICT_CODES, stated in each report as ``verdict``; copied for reports stored
 # before that field, because this module imports nothing of plantsolve)
 VERDICT_CODES = frozenset({"inspection_failed", "inspection_not_determined", "inspection_not_comparable",
-                           "volume_not_determined", "totals_not_determined", "rigidity_not_determined", "one_piece_not_determined",
-                           "submodels_missing", "not_converged", "verification_failed", "tolerance_not_reached"})
+                           "volume_not_determined", "totals_not_determined", "rigidity_not_determined",
+                           "one_piece_not_determined", "submodels_missing", "not_converged", "verification_failed",
+                           "tolerance_not_reached"})
 RECONNECT_SECONDS = 1.0  # pause before opening a cut event stream again
 FileArgument = Union[str, Path, bytes, tuple[str, bytes]]
 
