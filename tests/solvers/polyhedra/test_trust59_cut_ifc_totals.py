@@ -5,10 +5,12 @@ names, those not measured and the objects past the cut; the summary says the tot
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
 
+from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.polyhedra.ifc_cut import aggregated_past_cut, holds_every_instance
 from plantsolve.solvers.polyhedra.solve import solve
@@ -86,3 +88,13 @@ def test_aggregations_written_one_after_another_on_one_line_are_each_counted():
             "#5=IFCRELAGGREGATES('c',$,$,$,#2,(#30,#32));")
     assert aggregated_past_cut(text, _Model()) == 3  # #30, #31, #32
 
+
+
+@pytest.mark.parametrize("cut", [{}, "yes", {"format": "IFC", "line": 3, "spaces_named": "x", "spaces_measured": 1,
+                                              "spaces_not_measured": 5, "objects_past_cut": 0}])
+def test_a_json_bodys_own_read_to_cut_of_another_shape_is_ignored(cut):
+    # 'source' is free in a JSON body: only the IFC reader's shape of read_to_cut gives the verdict
+    body = {**json.loads((Path(__file__).parents[3] / "examples/polyhedra/gable_house.json").read_text()),
+            "source": {"read_to_cut": cut}}
+    result = solve(PolyhedraRequest.model_validate(body)).result
+    assert result.report.verdict is None and result.report.status == "ok"
