@@ -12,7 +12,10 @@ import pytest
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.polyhedra.ifc_cut import aggregated_past_cut, holds_every_instance
+from plantsolve.solvers.polyhedra.ifc_cut import (
+    aggregated_past_cut,
+    holds_every_instance,
+)
 from plantsolve.solvers.polyhedra.solve import solve
 from plantsolve.solvers.polyhedra.upload import parse_upload
 from plantsolve.solvers.step_file import blank_strings_and_comments
