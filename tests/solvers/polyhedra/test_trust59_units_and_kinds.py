@@ -120,6 +120,8 @@ def test_a_ply_scan_named_stl_is_refused_naming_ply():
         parse_upload(StoredInput.from_bytes("room.stl", (ROOT / "examples/tube/scan.ply").read_bytes()), None)
     (error,) = refused.value.errors
     assert error.loc == ("file",) and "PLY" in error.msg
+    # one sentence: the format named says what the reader's own 'not an STL file: …' said again
+    assert error.msg == "this file holds a PLY point cloud or mesh, not an STL mesh as its name says"
 
 
 @pytest.mark.parametrize("header", [b"", b"plywood shelf", b"ply", b"{part 7}", b"<Part1>", b"[mesh]"])
