@@ -56,7 +56,7 @@ def _read_to_cut(cut: object) -> bool:
 def totals_not_determined(source: dict | None) -> Diagnostic | None:
     """The verdict of a file read only as far as its cut (``source.read_to_cut``: what the reader counted before
     it), or None when the file is whole."""
-    cut = (source or {}).get("read_to_cut") if isinstance(source, dict) else None
+    cut = source.get("read_to_cut") if isinstance(source, dict) else None
     if not _read_to_cut(cut):  # a JSON body's own 'source' is free text: only the reader's shape counts
         return None
     named, measured, past = cut["spaces_named"], cut["spaces_measured"], cut["objects_past_cut"]
