@@ -44,11 +44,20 @@ def volumes_not_determined(zones: list[dict], warnings: list[Diagnostic]) -> Dia
         details={"zones": [z["id"] for z in missing], "zones_total": len(zones)})
 
 
+def _read_to_cut(cut: object) -> bool:
+    """Whether ``cut`` has the shape the IFC reader gives ``source.read_to_cut``."""
+    counts = ("line", "spaces_named", "spaces_measured", "objects_past_cut")
+    return (isinstance(cut, dict) and isinstance(cut.get("format"), str)
+            and all(isinstance(cut.get(k), int) and not isinstance(cut.get(k), bool) for k in counts)
+            and isinstance(cut.get("spaces_not_measured"), list)
+            and all(isinstance(label, str) for label in cut["spaces_not_measured"]))
+
+
 def totals_not_determined(source: dict | None) -> Diagnostic | None:
     """The verdict of a file read only as far as its cut (``source.read_to_cut``: what the reader counted before
     it), or None when the file is whole."""
-    cut = (source or {}).get("read_to_cut")
-    if not isinstance(cut, dict):
+    cut = source.get("read_to_cut") if isinstance(source, dict) else None
+    if not _read_to_cut(cut):  # a JSON body's own 'source' is free text: only the reader's shape counts
         return None
     named, measured, past = cut["spaces_named"], cut["spaces_measured"], cut["objects_past_cut"]
     lacking = cut["spaces_not_measured"]

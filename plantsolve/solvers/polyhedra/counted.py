@@ -39,7 +39,9 @@ def implausible_multipliers(zones: list[dict], units: str, source: dict | None) 
     or copies together above the largest buildings' volume or floor area), their ``Zone`` objects' lines (the IDF
     reader's ``source.multiplied_zone_lines``) and what they add to the totals."""
     k = METRES[units]
-    lines = (source or {}).get("multiplied_zone_lines") or {}
+    said = source.get("multiplied_zone_lines") if isinstance(source, dict) else None
+    # a JSON body's own 'source' is free text: only the IDF reader's {zone: line} counts
+    lines = {z: n for z, n in said.items() if isinstance(n, int)} if isinstance(said, dict) else {}
     # a zone counted once is no multiplier's doing (a zone too large alone is implausible_zone_volume's)
     found = [z for z in zones if z["multiplier"] > 1 and (
         z["multiplier"] > MAX_COPIES or (z["volume"] or 0.0) * z["multiplier"] * k ** 3 > MAX_COPIES_VOLUME

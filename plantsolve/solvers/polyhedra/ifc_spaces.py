@@ -28,7 +28,7 @@ from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.ifc_units import project_length_scale
 from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
-from plantsolve.solvers.polyhedra.ifc_cut import aggregated_past_cut
+from plantsolve.solvers.polyhedra.ifc_cut import aggregated_past_cut, holds_every_instance
 from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out, lines_of_another_schema
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, blank_strings_and_comments, line_ends, where_cut
@@ -201,13 +201,12 @@ def parse_ifc(content: bytes) -> dict:
     length_name = ifcopenshell.util.unit.get_full_unit_name(length) if length is not None else "none assigned: metres"
     spaces_listed = {zone_of[s.id()]: {"global_id": s.GlobalId, "name": s.Name, "long_name": s.LongName}
                      for s in spaces if s.id() in shaped}
-    # a DATA section cut open: the totals are those of the spaces read, not the building's (a file missing only its
-    # trailer after 'ENDSEC;' holds every instance)
+    # a DATA section cut open: the totals are those of the spaces read, not the building's (a file missing only (part
+    # of) its trailer after 'ENDSEC;' holds every instance)
     read_to_cut = {"read_to_cut": {
         "format": "IFC", "line": cut_line, "spaces_named": len(spaces), "spaces_measured": len(shaped),
         "spaces_not_measured": [label[s.id()] for s in spaces if s.id() not in shaped][:MAX_SKIPPED_LISTED],
-        "objects_past_cut": aggregated_past_cut(blanked, model)}} if cut and not blanked.rstrip().endswith(
-        "ENDSEC;") else {}
+        "objects_past_cut": aggregated_past_cut(blanked, model)}} if cut and not holds_every_instance(blanked) else {}
     return {"units": "m", "vertices": np.concatenate(vertices).tolist(), "faces": faces,
             "source": {"format": "ifc", "schema": model.schema,
                        "units": stated(symbol(length_scale), length_scale,

@@ -135,11 +135,13 @@ def building_too_low(measures: Mapping[str, Mapping[str, float]], units: str, hi
 
 def zones_all_too_tall(measures: Mapping[str, Mapping[str, float]], units: str, hint: str,
                        read_as: tuple[str, float] | None = None) -> list[Diagnostic]:
-    """``implausible_lowest_zone_height`` when every zone with a height stands over :data:`LOWEST`'s 50 m and is at
-    least as wide as high (a room's shape), naming the lowest and the unit that would make it a storey's."""
+    """``implausible_lowest_zone_height`` when every room-shaped zone (at least as wide as high) stands over
+    :data:`LOWEST`'s 50 m, naming the lowest and the unit that would make it a storey's. A zone taller than wide (a
+    stair, a shaft, an atrium) is left out rather than let it silence the check for the whole model."""
     read_as = read_as or (units, METRES[units])
-    heights = {zone: size["height"] for zone, size in measures.items() if size.get("height", 0) > 0}
-    if not heights or any(measures[zone].get("extent", 0) < height for zone, height in heights.items()):
+    heights = {zone: size["height"] for zone, size in measures.items()
+               if size.get("height", 0) > 0 and size.get("extent", 0) >= size["height"]}
+    if not heights:
         return []
     zone, value = min(heights.items(), key=lambda item: item[1])
     si = value * METRES[units]
@@ -148,9 +150,9 @@ def zones_all_too_tall(measures: Mapping[str, Mapping[str, float]], units: str, 
     mix = _mix_up(si, STOREY, read_as)
     likely = (f"the numbers look like {mix[0]} read as {read_as[0]} ({si / read_as[1]:.4g} {mix[0]} = {mix[1]:.3g} "
               f"m, a storey's height): {hint.format(unit=mix[0])}") if mix else "check the coordinates' unit"
-    every = f"the lowest of {len(heights)} zones, {zone!r}," if len(heights) > 1 else f"the one zone, {zone!r},"
+    every = f"the lowest of {len(heights)} such zones, {zone!r}," if len(heights) > 1 else f"the one such zone, {zone!r},"
     return [Diagnostic(code=LOWEST.code, message=(
-        f"Every zone stands over {LOWEST.high / METRES[units]:.3g} {units} high and is wider than high ({every} is "
+        f"Every zone wider than high stands over {LOWEST.high / METRES[units]:.3g} {units} high ({every} is "
         f"{value:.4g} {units} high): a hangar's or a stadium's height, never every room's; unless the model is such "
         f"a hall, {likely}."),
         details={"quantity": LOWEST.quantity, "units": units, "lowest_zone": zone, "height": value,

@@ -737,10 +737,10 @@ def parse_stl(content: bytes) -> dict:
                                        "there was not read.").model_dump())
     elif not ascii_like and not binary_like and _is_text(content[84:4096]):
         # text under an .stl name (an OBJ, a CSV) read as a binary STL cut short: its characters as garbage floats
-        raise reject("not an STL file: it is text, and not an ASCII STL ('solid … facet … endsolid')")
+        raise reject(f"{NOT_STL}: it is text, and not an ASCII STL ('solid … facet … endsolid')")
     elif not ascii_like and not binary_like and _another_format(content):
         # a PLY, a STEP or IFC model, a zip under an .stl name: read as a binary STL cut short, garbage floats
-        raise reject("not an STL file: its first bytes are another format's")
+        raise reject(f"{NOT_STL}: its first bytes are another format's")
     elif not ascii_like and 84 < len(content) < 84 + 50 * declared:
         whole = (len(content) - 84) // 50  # a binary file cut short: its whole triangles are read
         if whole == 0:
@@ -752,7 +752,7 @@ def parse_stl(content: bytes) -> dict:
         content = content[:80] + struct.pack("<I", whole) + content[84:84 + 50 * whole]
         binary_like = cut_binary = True
     if not (ascii_like or binary_like):
-        raise reject("not an STL file (neither ASCII 'solid … facet' nor a binary STL whose size matches its "
+        raise reject(f"{NOT_STL} (neither ASCII 'solid … facet' nor a binary STL whose size matches its "
                      "triangle count)")
     if ascii_like:
         _refuse_unreadable_numbers(content, only_commas=True)
@@ -960,9 +960,10 @@ def _is_epjson(body: dict) -> bool:
     return not set(body) & set(PolyhedraRequest.model_fields) and any(key.lower() in EPJSON_TYPES for key in body)
 
 
+NOT_STL = "not an STL file"  # the STL reader's refusal of a file that is no STL at all
 EXPECTED = {".idf": "an EnergyPlus IDF", ".epjson": "a JSON document", ".json": "a JSON document",
             ".xml": "a gbXML building model", ".gbxml": "a gbXML building model", ".ifc": "an IFC model",
-            ".obj": "a Wavefront OBJ mesh", ".stl": "an ASCII STL mesh"}
+            ".obj": "a Wavefront OBJ mesh", ".stl": "an STL mesh"}
 
 
 def read_file(extension: str, content: bytes) -> dict:
@@ -984,8 +985,10 @@ def name_what_it_holds(refused: InputRejected, extension: str, content: bytes) -
     if holds is None or holds.startswith(EXPECTED.get(extension, "?")) or extension == ".stl" and "STL" in holds:
         return refused
     first, *rest = refused.errors
-    return InputRejected([replace(first, msg=f"this file holds {holds}, not {EXPECTED[extension]} as its name "
-                                             f"says: {first.msg}"), *rest])
+    said = f"this file holds {holds}, not {EXPECTED[extension]} as its name says"
+    # the STL reader's own 'not an STL file' says less than the format named: one sentence, not the two
+    return InputRejected([replace(first, msg=said if first.msg.startswith(NOT_STL) else f"{said}: {first.msg}"),
+                          *rest])
 
 
 FORM = FormRules(PolyhedraRequest, units="result")

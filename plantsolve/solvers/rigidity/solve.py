@@ -339,10 +339,10 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
         message += (f"; the drawing places {len(builds)} piece(s) apart as separate builds: "
                     + ", ".join(f"{b['first']} ({b['parts']} parts)" for b in builds[:LISTED_IN_MESSAGE]))
     source = request.source or {}
-    not_read = source.get("placements_not_read")
+    not_read, past_limit = (source.get(key) for key in ("placements_not_read", "parts_past_limit"))
     coverage = coverage_verdict(len(part_ids), [u.part.lower() for u in unknown],
                                 np.array([positions[u.id] for u in unknown], dtype=float).reshape(-1, 3),
-                                not_read if type(not_read) is int and not_read > 0 and request.parts else 0)
+                                *(n if type(n) is int and n > 0 and request.parts else 0 for n in (not_read, past_limit)))
     # a model of parts is one build unless its drawing says otherwise (bodies and joints: the joints are the user's)
     apart = one_piece_verdict(piece_results) if request.parts else None
     missing = missing_submodels_verdict(source.get("missing_submodels") or {}, source.get("missing_submodels_count"))

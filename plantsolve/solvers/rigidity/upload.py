@@ -60,6 +60,7 @@ LDRAW_UNITS = {"file_unit": "ldu", "result_unit": "ldu", "factor": 1.0,
 MAX_SKIPPED_LISTED = 200
 MAX_PLACEMENTS_LISTED = 2000  # sub-model placements named in source (the solver tells sub-builds by them)
 MAX_PARTS = 20_000
+NOT_READ, PAST_LIMIT = "not_read", "past_limit"  # why a skipped line's parts are missing: its placement, MAX_PARTS
 # Rows of a placement's matrix off orthonormal by up to this are a rotation printed with few digits, read as the
 # nearest rotation; further off, the line scales or shears its part and is skipped.
 ROUNDED_ROTATION = 1e-2
@@ -365,6 +366,13 @@ def parse_ldraw(text: str) -> dict:
             parts_in[sub] = sum(parts_placed_by(line, (*stack, sub)) for _, line in files[sub])
         return parts_in[sub]
 
+    unread: list[tuple[int, str]] = []  # (line, NOT_READ or PAST_LIMIT) of the skipped lines that placed something
+
+    def skip(number: int, reason: str, kind: str | None = None) -> None:
+        skipped.append({"line": number, "reason": reason})
+        if kind is not None:
+            unread.append((number, kind))
+
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
             tokens = raw.split()
@@ -381,21 +389,21 @@ def parse_ldraw(text: str) -> dict:
                 skipped.append({"line": number, "reason": f"line type {kind!r} is not an LDraw line type"})
                 continue
             if number == cut:
-                skipped.append({"line": number, "reason": "the file ends inside this line (no line ending, "
-                                "fields or the file name's extension missing): not read"})
+                skip(number, "the file ends inside this line (no line ending, fields or the file name's extension "
+                     "missing): not read", NOT_READ)
                 continue
             if len(tokens) < 15:
-                skipped.append({"line": number, "reason": f"a type-1 line needs 15 fields, this one has {len(tokens)}"})
+                skip(number, f"a type-1 line needs 15 fields, this one has {len(tokens)}", NOT_READ)
                 continue
             try:
                 values = [float(t) for t in tokens[2:14]]
             except ValueError:
                 comma = next((t for t in tokens[2:14] if _numbers(t) and "," in t), None)
-                skipped.append({"line": number, "reason": "position or rotation is not a number" + (
-                    f" ({comma!r}: a decimal comma; LDraw numbers take a decimal point)" if comma else "")})
+                skip(number, "position or rotation is not a number" + (
+                    f" ({comma!r}: a decimal comma; LDraw numbers take a decimal point)" if comma else ""), NOT_READ)
                 continue
             if not np.isfinite(values).all():
-                skipped.append({"line": number, "reason": "position or rotation is not finite"})
+                skip(number, "position or rotation is not finite", NOT_READ)
                 continue
             file_name = raw.split(None, 14)[14].strip()
             local_pos = np.array(values[:3])
@@ -407,13 +415,13 @@ def parse_ldraw(text: str) -> dict:
                 drawn.setdefault(number, file_name)
                 continue
             if abs(np.linalg.det(local_rot)) < 1e-6:
-                skipped.append({"line": number, "reason": "the rotation matrix is singular"})
+                skip(number, "the rotation matrix is singular", NOT_READ)
                 continue
             with np.errstate(over="ignore", invalid="ignore"):  # entries of 1e308: off is inf, the line skipped
                 off = float(np.abs(local_rot @ local_rot.T - np.eye(3)).max())
             if off > (HAND_TYPED_ROTATION if role == "model" else ROUNDED_ROTATION):
-                skipped.append({"line": number, "reason": f"the matrix is not a rotation (scaled or sheared: its rows "
-                                f"are off orthonormal by {off:.3g})"})
+                skip(number, f"the matrix is not a rotation (scaled or sheared: its rows are off orthonormal by "
+                     f"{off:.3g})", NOT_READ)
                 continue
             if off > ROUNDED_ROTATION:
                 hand_typed.append((number, off))
@@ -426,7 +434,7 @@ def parse_ldraw(text: str) -> dict:
             world_rot = rot @ local_rot
             world_pos = rot @ local_pos + pos
             if not np.all(np.abs(world_pos) <= MAX_COORDINATE):  # NaN fails too: an absurd float, or its overflow
-                skipped.append({"line": number, "reason": f"the position is beyond {MAX_COORDINATE:g} LDU"})
+                skip(number, f"the position is beyond {MAX_COORDINATE:g} LDU", NOT_READ)
                 continue
             ident = f"{prefix}L{number}"
             if role is None and _key(file_name).endswith(MODEL_EXTENSIONS):  # parts are .dat: this is a model
@@ -447,8 +455,7 @@ def parse_ldraw(text: str) -> dict:
                     skipped.append({"line": number, "reason": f"sub-model {file_name!r} includes itself ({loop})"})
                     continue
                 if len(stack) >= MAX_DEPTH:
-                    skipped.append({"line": number,
-                                    "reason": f"sub-model {file_name!r} is nested more than {MAX_DEPTH} levels deep"})
+                    skip(number, f"sub-model {file_name!r} is nested more than {MAX_DEPTH} levels deep", NOT_READ)
                     continue
                 # counted as it expands: a fan-out of sub-models (10 includes x 8 levels = 10^8 placements) is
                 # refused once it passes the bound, before it expands further
@@ -461,7 +468,7 @@ def parse_ldraw(text: str) -> dict:
                 expand(sub, world_rot, world_pos, ident + "/", (*stack, sub))
                 continue
             if len(parts) >= MAX_PARTS:
-                skipped.append({"line": number, "reason": f"more than {MAX_PARTS} parts"})
+                skip(number, f"more than {MAX_PARTS} parts", PAST_LIMIT)
                 continue
             if np.linalg.det(world_rot) < 0 and lookup(file_name) is not None:  # unknown parts: not analysed
                 planes = symmetry_planes(file_name)
@@ -488,10 +495,11 @@ def parse_ldraw(text: str) -> dict:
     # what the skipped placements would have placed (a sub-model placed by a scaling matrix: all its parts), counted
     # before a line repeated by its sub-model's placements is said once: a verdict on the model needs the parts read
     # to be most of it (a placement a sub-model's missing section or its own loop skips is not counted:
-    # submodels_missing says the one, the other places nothing)
+    # submodels_missing says the one, the other places nothing). Bounded: a fan-out of sub-models places 10^30.
     raw_of = {number: raw for section in files.values() for number, raw in section}
-    not_read = sum(parts_placed_by(raw_of.get(entry["line"], ""), (main,)) for entry in skipped
-                   if not entry["reason"].startswith(("places sub-model", "sub-model ", "line type ")))
+    not_read = min(sum(parts_placed_by(raw_of.get(line, ""), (main,)) for line, kind in unread if kind == NOT_READ),
+                   MAX_PARTS + 1)
+    past_limit = min(sum(kind == PAST_LIMIT for _, kind in unread), MAX_PARTS + 1)
     # a line of a sub-model placed n times is skipped n times: one line of the file, said once
     first_of_line: dict[int, dict] = {}
     for entry in skipped:
@@ -559,7 +567,7 @@ def parse_ldraw(text: str) -> dict:
                                                              in list(missing.values())[:MAX_SKIPPED_LISTED]},
                                        "missing_submodels_count": len(missing),
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
-                                       "placements_not_read": not_read,
+                                       "placements_not_read": not_read, "parts_past_limit": past_limit,
                                        "warnings": warnings}}
 
 

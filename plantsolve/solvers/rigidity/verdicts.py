@@ -28,6 +28,7 @@ from scipy.spatial import cKDTree
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.rigidity import Piece
+from plantsolve.solvers.rigidity.upload import MAX_PARTS
 
 # LDU: half a plate's height. Two solid parts of one number whose origins are closer than this overlap, so parts so
 # placed are segments of one flexible element (LSynth draws its hoses and ropes 1-3 LDU a segment).
@@ -55,28 +56,37 @@ def unknown_elements(numbers: Sequence[str], positions: np.ndarray) -> int:
     return int(count)
 
 
+def _count(n: int, most: int) -> str:
+    return f"more than {most}" if n > most else str(n)
+
+
 def coverage_verdict(known: int, unknown_numbers: Sequence[str], unknown_positions: np.ndarray,
-                     not_read: int = 0) -> Diagnostic | None:
+                     not_read: int = 0, past_limit: int = 0, most: int = MAX_PARTS) -> Diagnostic | None:
     """``rigidity_not_determined`` when the known parts are no majority of the model's elements: those the catalogue
-    lacks, and the parts the placements the reader skipped would have placed (``not_read``: a matrix that scales, a
-    position not finite, a line cut; a sub-model's line all its parts), each one element."""
-    if not len(unknown_numbers) and not not_read:
+    lacks, the parts the placements the reader skipped would have placed (``not_read``: a matrix that scales, a
+    position not finite, a line cut, a sub-model nested too deep; a sub-model's line all its parts) and those past
+    the reader's limit of ``most`` parts (``past_limit``), each one element; a count above ``most`` is said as such."""
+    if not len(unknown_numbers) and not not_read and not past_limit:
         return None
     elements = unknown_elements(unknown_numbers, unknown_positions)
-    share = (elements + not_read) / (known + elements + not_read)
+    unseen = not_read + past_limit
+    share = (elements + unseen) / (known + elements + unseen)
     if share < 1.0 - KNOWN_MAJORITY:
         return None
     counted = [(f"{len(unknown_numbers)} part(s) not in the catalogue, {elements} element(s) counting a chain of "
                 "segments as one")] if len(unknown_numbers) else []
-    counted += [f"{not_read} part(s) placed by lines that could not be read (skipped_lines; a sub-model's line "
-                "counts its parts)"] if not_read else []
+    counted += [(f"{_count(not_read, most)} part(s) placed by lines that could not be read (skipped_lines; a "
+                 "sub-model's line counts its parts)")] if not_read else []
+    counted += [f"{_count(past_limit, most)} part(s) past the reader's limit of {most} parts, not read"] \
+        if past_limit else []
     return Diagnostic(
         code="rigidity_not_determined", message=f"rigidity not determined: the parts "
-        f"{'not in the catalogue or not read' if not_read else 'not in the catalogue'} are {share:.0%} of the model "
+        f"{'not in the catalogue or not read' if unseen else 'not in the catalogue'} are {share:.0%} of the model "
         f"({'; '.join(counted)}; {known} known part(s)), so dof, rigid and the pieces, counted over the known parts "
         f"only, cover no majority of it (rigid is null; a verdict needs the known parts above {KNOWN_MAJORITY:.0%})",
         details={"unknown_share": round(share, 4), "unknown_parts": len(unknown_numbers),
-                 "unknown_elements": elements, "placements_not_read": not_read, "known_parts": known,
+                 "unknown_elements": elements, "placements_not_read": not_read,
+                 "parts_past_limit": past_limit, "known_parts": known,
                  "known_share_needed": KNOWN_MAJORITY})
 
 

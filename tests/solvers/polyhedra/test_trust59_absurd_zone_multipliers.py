@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.polyhedra.solve import solve
 from plantsolve.solvers.polyhedra.upload import parse_upload
@@ -90,3 +91,13 @@ def test_zero_negative_and_fractional_multipliers_stay_refused_naming_the_line(v
         solved(with_multiplier(value))
     (error,) = refused.value.errors
     assert error.loc[:2] == ("file", "line") and "Multiplier" in error.msg
+
+
+@pytest.mark.parametrize("lines", [[1, 2], "abc", {"default": [1]}, {"default": "12"}])
+def test_a_json_bodys_own_multiplied_zone_lines_of_another_shape_are_ignored(lines):
+    # 'source' is free in a JSON body: the IDF reader's {zone: line} is the only shape read, anything else is not
+    body = {**json.loads((Path(__file__).parents[3] / "examples/polyhedra/gable_house.json").read_text()),
+            "zone_multipliers": {"default": 100000}, "source": {"multiplied_zone_lines": lines}}
+    result = solve(PolyhedraRequest.model_validate(body)).result
+    (warning,) = multiplier_warnings(result)
+    assert warning.details["zones"] == {"default": 100000} and "its Zone at line" not in warning.message

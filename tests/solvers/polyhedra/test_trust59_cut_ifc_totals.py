@@ -5,13 +5,20 @@ names, those not measured and the objects past the cut; the summary says the tot
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
 
+from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.polyhedra.ifc_cut import (
+    aggregated_past_cut,
+    holds_every_instance,
+)
 from plantsolve.solvers.polyhedra.solve import solve
 from plantsolve.solvers.polyhedra.upload import parse_upload
+from plantsolve.solvers.step_file import blank_strings_and_comments
 
 IFC = (Path(__file__).parent / "data/ifcopenshell_spaces.ifc").read_text()
 
@@ -52,3 +59,45 @@ def test_the_whole_file_and_one_missing_only_its_trailer_are_determined():
     trailer_lost = IFC[:IFC.rindex("END-ISO-10303-21;")]  # every instance and 'ENDSEC;' there: nothing lost
     result = solved(trailer_lost)
     assert result.report.verdict is None and "truncated_file" in {w.code for w in result.report.warnings}
+
+
+@pytest.mark.parametrize("tail", ["END-ISO-10303-21", "END-ISO-1", "E", "\x00" * 64, "\x1a", "END-ISO-10303-21;\x00\x00"])
+def test_a_file_missing_part_of_its_trailer_or_padded_after_it_is_determined(tail):
+    text = IFC[:IFC.rindex("END-ISO-10303-21;")] + tail
+    assert holds_every_instance(blank_strings_and_comments(text))
+    assert solved(text).report.verdict is None
+
+
+def test_a_file_cut_before_its_data_section_ends_does_not_hold_every_instance():
+    before_endsec = IFC[:IFC.rindex("ENDSEC;")]  # the header's ENDSEC; followed by DATA; is the last one left
+    assert not holds_every_instance(blank_strings_and_comments(before_endsec))
+    assert not holds_every_instance(blank_strings_and_comments(cut_inside(60)))
+
+
+class _Model:
+    """Instances #1..#10 held, those past them cut off; every one a spatial element."""
+
+    def by_id(self, number):
+        if number > 10:
+            raise RuntimeError("no instance")
+        return self
+
+    def is_a(self, kind):
+        return True
+
+
+def test_aggregations_written_one_after_another_on_one_line_are_each_counted():
+    text = ("HEADER;ENDSEC;DATA;#1=IFCRELAGGREGATES('a',$,$,$,#2,(#30,#3));#4=IFCRELAGGREGATES('b',$,$,$,#2,(#31));"
+            "#5=IFCRELAGGREGATES('c',$,$,$,#2,(#30,#32));")
+    assert aggregated_past_cut(text, _Model()) == 3  # #30, #31, #32
+
+
+
+@pytest.mark.parametrize("cut", [{}, "yes", {"format": "IFC", "line": 3, "spaces_named": "x", "spaces_measured": 1,
+                                              "spaces_not_measured": 5, "objects_past_cut": 0}])
+def test_a_json_bodys_own_read_to_cut_of_another_shape_is_ignored(cut):
+    # 'source' is free in a JSON body: only the IFC reader's shape of read_to_cut gives the verdict
+    body = {**json.loads((Path(__file__).parents[3] / "examples/polyhedra/gable_house.json").read_text()),
+            "source": {"read_to_cut": cut}}
+    result = solve(PolyhedraRequest.model_validate(body)).result
+    assert result.report.verdict is None and result.report.status == "ok"

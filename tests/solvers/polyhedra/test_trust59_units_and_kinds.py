@@ -93,11 +93,35 @@ def test_obj_rooms_in_inches_without_a_header_are_named_with_inches():
     assert "implausible_lowest_zone_height" not in codes(solved("rooms.obj", two_rooms_obj(1.0)))
 
 
+def rooms_and_stair_obj(k: float) -> bytes:
+    """Two 4 x 3 x 2.7 m rooms and a 2 x 2 x 5.4 m stair (two storeys: taller than wide), every coordinate times
+    ``k``, no header."""
+    text, base = "", 0
+    for zone, x0, (dx, dy, dz) in (("a", 0.0, (4, 3, 2.7)), ("b", 4.0, (4, 3, 2.7)), ("stair", 8.0, (2, 2, 5.4))):
+        points = [((x0 + x) * k, y * k, z * k) for x in (0, dx) for y in (0, dy) for z in (0, dz)]
+        text += f"o {zone}\n" + "".join(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in points)
+        text += "".join("f " + " ".join(str(base + i) for i in q) + "\n"
+                        for q in ((1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)))
+        base += 8
+    return text.encode()
+
+
+def test_a_stair_taller_than_wide_beside_rooms_in_inches_does_not_silence_the_rooms():
+    # the stair is no room's shape and is left out; the rooms, 106 in high read as metres, are still named
+    result = solved("rooms.obj", rooms_and_stair_obj(1 / INCH))
+    (warning,) = [w for w in result.report.warnings if w.code == "implausible_lowest_zone_height"]
+    assert warning.details["likely_file_unit"] == "in" and warning.details["zones"] == 2
+    assert warning.details["height"] == pytest.approx(2.7 / INCH, rel=1e-6)
+    assert "implausible_lowest_zone_height" not in codes(solved("rooms.obj", rooms_and_stair_obj(1.0)))
+
+
 def test_a_ply_scan_named_stl_is_refused_naming_ply():
     with pytest.raises(InputRejected) as refused:
         parse_upload(StoredInput.from_bytes("room.stl", (ROOT / "examples/tube/scan.ply").read_bytes()), None)
     (error,) = refused.value.errors
     assert error.loc == ("file",) and "PLY" in error.msg
+    # one sentence: the format named says what the reader's own 'not an STL file: …' said again
+    assert error.msg == "this file holds a PLY point cloud or mesh, not an STL mesh as its name says"
 
 
 @pytest.mark.parametrize("header", [b"", b"plywood shelf", b"ply", b"{part 7}", b"<Part1>", b"[mesh]"])

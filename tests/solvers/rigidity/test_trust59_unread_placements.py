@@ -4,11 +4,14 @@ parts. Before, two bricks of which one was placed by a scaling matrix were 'rigi
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.rigidity import upload
 from plantsolve.solvers.rigidity.solve import solve
-from plantsolve.solvers.rigidity.upload import parse_upload
+from plantsolve.solvers.rigidity.upload import MAX_DEPTH, MAX_PARTS, parse_upload
+from plantsolve.solvers.rigidity.verdicts import coverage_verdict
 
 IDENTITY = "1 0 0 0 1 0 0 0 1"
 
@@ -70,3 +73,39 @@ def test_a_sub_model_placed_by_a_scaling_matrix_counts_every_part_it_holds():
     (verdict,) = [w for w in result.report.warnings if w.code == "rigidity_not_determined"]
     assert verdict.details["placements_not_read"] == 6 and verdict.details["unknown_share"] == pytest.approx(0.75)
     assert "6 part(s) placed by lines that could not be read" in verdict.message
+
+
+def chain(depth: int, first: str = IDENTITY) -> str:
+    """A brick in every one of ``depth`` + 2 sub-models, each placing the next one brick higher."""
+    text = "0 FILE main.ldr\n" + brick(0) + f"1 16 0 -24 0 {first} s0.ldr\n"
+    for d in range(depth):
+        text += f"0 FILE s{d}.ldr\n" + brick(0) + f"1 16 0 -24 0 {IDENTITY} s{d + 1}.ldr\n"
+    return text + f"0 FILE s{depth}.ldr\n" + brick(0)
+
+
+def test_sub_models_nested_past_the_depth_limit_count_the_parts_they_hold():
+    request = parse_upload(StoredInput.from_bytes("model.mpd", chain(40).encode()), None)
+    assert len(request.parts) == MAX_DEPTH  # the bricks read, the rest past the line nested too deep
+    assert request.source["placements_not_read"] == 42 - MAX_DEPTH  # 42 bricks: none lost, none counted twice
+
+
+def test_a_fan_out_of_sub_models_placed_by_a_scaling_matrix_counts_at_most_one_more_than_the_limit():
+    text = "0 FILE main.ldr\n" + brick(0) + "1 16 0 -24 0 2 0 0 0 2 0 0 0 2 l0.ldr\n"
+    for d in range(30):  # ten placements a level, thirty levels: 10^30 parts
+        text += f"0 FILE l{d}.ldr\n" + "".join(f"1 16 0 {-24 * k} 0 {IDENTITY} l{d + 1}.ldr\n" for k in range(10))
+    request, result = solved(text + "0 FILE l30.ldr\n" + brick(0), "model.mpd")
+    assert request.source["placements_not_read"] == MAX_PARTS + 1
+    (verdict,) = [w for w in result.report.warnings if w.code == "rigidity_not_determined"]
+    assert f"more than {MAX_PARTS} part(s) placed by lines that could not be read" in verdict.message
+
+
+def test_parts_past_the_parts_limit_are_said_as_such_not_as_lines_not_read(monkeypatch):
+    monkeypatch.setattr(upload, "MAX_PARTS", 2)
+    request = parse_upload(StoredInput.from_bytes("model.ldr", "".join(brick(-24 * k) for k in range(5)).encode()),
+                           None)
+    assert len(request.parts) == 2 and request.source["parts_past_limit"] == 3
+    assert request.source["placements_not_read"] == 0
+    verdict = coverage_verdict(2, [], np.zeros((0, 3)), 0, 3)
+    assert verdict.details["parts_past_limit"] == 3
+    assert f"3 part(s) past the reader's limit of {MAX_PARTS} parts" in verdict.message
+    assert "could not be read" not in verdict.message
