@@ -13,7 +13,8 @@ A header line with one name per column is read: columns named x, y, z (``X``, ``
 easting, northing, elevation) are
 the coordinates wherever they stand (an index column first is common), and a unit they all state is the file's
 unit, in their names or in a line of units under them (``x,y,z`` then ``mm,mm,mm``); a column of text beside
-them (a point's name, ``Point,X,Y,Z`` over ``P12,...``) is left out, said in a warning. Without a header, a first
+them (a point's name, ``Point,X,Y,Z`` over ``P12,...``, also under a line of units, in a ``#`` header naming
+x, y, z, with decimal commas or quoted cells) is left out, said in a warning. Without a header, a first
 column that counts the rows (0 or 1, 2, 3, ...) is a row number: x, y, z are the next three columns (said in a
 warning). A header that names no x, y and z is a table of something else — a compressor map, an LRA or XYZ-CLR
 nominal — and is refused at intake naming its columns, as is a short table of four or five numbers a row (a
@@ -77,9 +78,8 @@ def _header_names(line: str) -> list[str]:
     also between blanks (``x [m] y [m] z [m]``: split at every blank, its units were columns of their own, the
     header no column header, and the file read in the request's unit) when the bracketed word is a length unit."""
     s = line.strip().lstrip("/#").strip()
-    for delim in (",", ";", "\t"):
-        if delim in s:
-            return [c.strip() for c in s.split(delim)]
+    if (delimiter := _header_delimiter(s)) is not None:
+        return _split_at(s, delimiter)
     names: list[str] = []
     for word in s.split():
         if names and _BRACKETED.fullmatch(word) and word[1:-1].strip() and \
@@ -213,12 +213,17 @@ def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
 HEADER_LINES_LOOKED_AT = 100  # a header stands within the file's first lines
 
 
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
+def _is_number(cell: str, delimiter: str | None) -> bool:
+    """Whether a cell of a row split at ``delimiter`` is a number as :mod:`.number_cells` reads one, in either
+    decimal mark (``251,500`` in a file of semicolons): the cells of text are told from them before the file's
+    mark is known, and a spreadsheet's decimal comma read as text took the rows for more header."""
+    for mark in ".,":
+        try:
+            float(plain(cell, mark, delimiter is None))
+        except ValueError:
+            continue
+        return True
+    return False
 
 
 def _header_delimiter(line: str) -> str | None:
@@ -227,7 +232,30 @@ def _header_delimiter(line: str) -> str | None:
 
 
 def _split_at(line: str, delimiter: str | None) -> list[str]:
-    return [c.strip() for c in line.split(delimiter)] if delimiter else line.split()
+    """A line's cells between ``delimiter`` (blanks: None), quoted cells read as a spreadsheet writes them, and
+    without the empty cells a trailing delimiter leaves (``Point,X,Y,Z,``: no column of its own)."""
+    if delimiter is None:
+        return line.split()
+    cells = [c.strip() for c in (next(csv.reader([line], delimiter=delimiter)) if '"' in line
+                                 else line.split(delimiter))]
+    while cells and not cells[-1]:
+        cells.pop()
+    return cells
+
+
+def _joined(cells: list[str], delimiter: str | None) -> str:
+    """``cells`` written again between ``delimiter``, a cell holding the delimiter quoted (``"2,515.5"``)."""
+    if delimiter is None:
+        return " ".join(cells)
+    return delimiter.join(f'"{c}"' if delimiter in c else c for c in cells)
+
+
+def _is_comment(line: str) -> bool:
+    """Whether a (stripped, not blank) line before the rows is a comment: ``%``, a single ``/``, or ``#`` unless it
+    names x, y and z (``# name x y z``, a header as :func:`_columns` reads one)."""
+    if line[0] == "%" or (line[0] == "/" and not line.startswith("//")):
+        return True
+    return line[0] == "#" and len(_axes([_name_and_unit(n)[0] for n in _header_names(line)])) < 3
 
 
 def _without_text_columns(lines: list[str], log: ReadLog) -> list[str]:
@@ -239,12 +267,14 @@ def _without_text_columns(lines: list[str], log: ReadLog) -> list[str]:
     looked_at = 0
     for at, line in enumerate(lines):
         s = line.strip()
-        if not s or s[0] in "#%" or (s[0] == "/" and not s.startswith("//")):
+        if not s or _is_comment(s):
             continue
         looked_at += 1
-        if looked_at > HEADER_LINES_LOOKED_AT or all(_is_number(f) for f in _SPLIT.split(s.lstrip("/")) if f):
+        if looked_at > HEADER_LINES_LOOKED_AT or all(_is_number(f, None) for f in _SPLIT.split(s.lstrip("/")) if f):
             return lines  # the rows start, or no header was found: no text column
         if header_at is not None:
+            if _with_units_line(lines[header_at], s):
+                continue  # ``Point,X,Y,Z`` over ``,mm,mm,mm``: the rows start under the units
             text = _text_columns(lines[header_at], s)
             if text:
                 return _cells_left_out(lines, header_at, at, text, log)
@@ -256,11 +286,12 @@ def _text_columns(header: str, row: str) -> list[int]:
     """The columns of ``row`` that hold text where ``header`` names x, y, z and ``row`` holds numbers in those
     (none when it does not)."""
     names = _header_names(header)
-    cells = _split_at(row, _header_delimiter(header.strip().lstrip("/#").strip()))
+    delimiter = _header_delimiter(header.strip().lstrip("/#").strip())
+    cells = _split_at(row, delimiter)
     axes = _axes([_name_and_unit(n)[0] for n in names])
-    if len(cells) != len(names) or len(axes) < 3 or not all(_is_number(cells[i]) for i in axes.values()):
+    if len(cells) != len(names) or len(axes) < 3 or not all(_is_number(cells[i], delimiter) for i in axes.values()):
         return []
-    return [k for k, c in enumerate(cells) if k not in axes.values() and not _is_number(c)]
+    return [k for k, c in enumerate(cells) if k not in axes.values() and c and not _is_number(c, delimiter)]
 
 
 def _cells_left_out(lines: list[str], header_at: int, first_row: int, text: list[int], log: ReadLog) -> list[str]:
@@ -276,7 +307,7 @@ def _cells_left_out(lines: list[str], header_at: int, first_row: int, text: list
     for at in range(header_at + 1, len(lines)):
         cells = _split_at(lines[at].strip(), delimiter)
         if len(cells) == len(names):
-            out[at] = joint.join(c for k, c in enumerate(cells) if k not in text)
+            out[at] = _joined([c for k, c in enumerate(cells) if k not in text], delimiter)
     left_out = [names[k] for k in text]
     example = _split_at(lines[first_row].strip(), delimiter)[text[0]]
     log.warn(Diagnostic(code="text_column_skipped", message=(
@@ -292,9 +323,9 @@ def _first_row(lines: list[str]) -> tuple[str | None, int, int]:
     header, header_line = None, 0
     for lineno, line in enumerate(lines, 1):
         s = line.strip()
-        if not s or s[0] in "#%" or (s[0] == "/" and not s.startswith("//")):
+        if not s or _is_comment(s):
             continue
-        fields = [f for f in _SPLIT.split(s.lstrip("/")) if f]
+        fields = [f for f in _SPLIT.split(s.lstrip("/#")) if f]
         try:
             [float(f) for f in fields]
         except ValueError:

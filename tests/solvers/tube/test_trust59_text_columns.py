@@ -47,3 +47,41 @@ def test_a_row_with_text_in_a_coordinate_column_is_left_out_and_named():
     points, warned = _read("scan.csv", "Point,X,Y,Z\n" + "\n".join(rows) + "\n")
     np.testing.assert_allclose(points, np.delete(POINTS, 5, axis=0), atol=5e-4)
     assert warned["records_skipped"].details["lines"] == [7]
+
+
+def _comma(v: float) -> str:
+    return f"{v:.3f}".replace(".", ",")
+
+
+@pytest.mark.parametrize(("name", "head", "row"), [
+    # a decimal comma (a spreadsheet's European export), between semicolons or tabs
+    ("scan.csv", "Point;X;Y;Z\n", lambda k, x, y, z: f"P{k};{_comma(x)};{_comma(y)};{_comma(z)}"),
+    ("scan.txt", "Point\tX\tY\tZ\n", lambda k, x, y, z: f"P{k}\t{_comma(x)}\t{_comma(y)}\t{_comma(z)}"),
+    # a line of units between the header and the rows
+    ("scan.csv", "Point,X,Y,Z\n,mm,mm,mm\n", lambda k, x, y, z: f"P{k},{x:.3f},{y:.3f},{z:.3f}"),
+    ("scan.csv", "Point,X,Y,Z\n-,mm,mm,mm\n", lambda k, x, y, z: f"P{k},{x:.3f},{y:.3f},{z:.3f}"),
+    # a header written as a comment, as a CloudCompare or a script writes it
+    ("scan.txt", "# name x y z\n", lambda k, x, y, z: f"pt{k} {x:.3f} {y:.3f} {z:.3f}"),
+    # quoted cells: numbers, and a name holding the delimiter
+    ("scan.csv", "Point,X,Y,Z\n", lambda k, x, y, z: f'P{k},"{x:.3f}","{y:.3f}","{z:.3f}"'),
+    ("scan.csv", "Point,X,Y,Z\n", lambda k, x, y, z: f'"P {k}, north",{x:.3f},{y:.3f},{z:.3f}'),
+])
+def test_a_text_column_is_left_out_in_a_spreadsheets_layouts(name, head, row):
+    text = head + "".join(row(k, x, y, z) + "\n" for k, (x, y, z) in enumerate(POINTS))
+    points, warned = _read(name, text)
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+    assert warned["text_column_skipped"].details["columns"] in (["Point"], ["name"])
+
+
+def test_the_units_line_under_a_header_with_a_text_column_is_read():
+    text = "Point,X,Y,Z\n,m,m,m\n" + "".join(f"P{k},{x / 1000:.6f},{y / 1000:.6f},{z / 1000:.6f}\n"
+                                            for k, (x, y, z) in enumerate(POINTS))
+    points, _ = _read("scan.csv", text, {"units": "mm"})
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+
+
+def test_a_trailing_delimiter_is_no_column_of_its_own():
+    text = "Point,X,Y,Z,\n" + "".join(f"P{k},{x:.3f},{y:.3f},{z:.3f},\n" for k, (x, y, z) in enumerate(POINTS))
+    points, warned = _read("scan.csv", text)
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+    assert warned["text_column_skipped"].details["columns"] == ["Point"]
