@@ -258,12 +258,14 @@ def _is_comment(line: str) -> bool:
     return line[0] == "#" and len(_axes([_name_and_unit(n)[0] for n in _header_names(line)])) < 3
 
 
-def _without_text_columns(lines: list[str], log: ReadLog) -> list[str]:
+def _without_text_columns(lines: list[str], log: ReadLog) -> tuple[list[str], str | None]:
     """The lines without the cells of columns that hold text (a point's name: ``Point,X,Y,Z`` over ``P12,...``,
     ``name x y z``) when a header names x, y and z and the first row under it holds numbers in those columns, with
     a warning naming the columns left out. A line of text under a header was taken for more header, and the file
-    was refused as holding no readable rows. Other files are returned as they are."""
+    was refused as holding no readable rows. Other files are returned as they are, with the header naming x, y, z
+    and the first line under it that matches none of this (said when the file is refused for want of rows)."""
     header_at = None
+    unmatched = None
     looked_at = 0
     for at, line in enumerate(lines):
         s = line.strip()
@@ -271,15 +273,21 @@ def _without_text_columns(lines: list[str], log: ReadLog) -> list[str]:
             continue
         looked_at += 1
         if looked_at > HEADER_LINES_LOOKED_AT or all(_is_number(f, None) for f in _SPLIT.split(s.lstrip("/")) if f):
-            return lines  # the rows start, or no header was found: no text column
+            return lines, unmatched  # the rows start, or no header was found: no text column
         if header_at is not None:
             if _with_units_line(lines[header_at], s):
                 continue  # ``Point,X,Y,Z`` over ``,mm,mm,mm``: the rows start under the units
             text = _text_columns(lines[header_at], s)
             if text:
-                return _cells_left_out(lines, header_at, at, text, log)
+                return _cells_left_out(lines, header_at, at, text, log), None
+            names = _header_names(lines[header_at])
+            if unmatched is None and len(_axes([_name_and_unit(n)[0] for n in names])) == 3:
+                cells = _split_at(s, _header_delimiter(lines[header_at].strip().lstrip("/#").strip()))
+                unmatched = (f"the header on line {header_at + 1} names {len(names)} columns ({', '.join(names)}), "
+                             f"line {at + 1} holds {len(cells)} cells ({s[:60]!r}) that do not read as a row of "
+                             "them (numbers under x, y, z)")
         header_at = at
-    return lines
+    return lines, unmatched
 
 
 def _text_columns(header: str, row: str) -> list[int]:
@@ -502,7 +510,8 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
         text = decode_text(content, "point list")
     except InputRejected as e:
         raise reject(f"the file is not text in UTF-8, UTF-16 or Windows-1252: {e.errors[0].msg}") from None
-    lines, unreadable = _plain_rows(_without_text_columns(text.splitlines(), log))
+    named_lines, unmatched = _without_text_columns(text.splitlines(), log)
+    lines, unreadable = _plain_rows(named_lines)
     counts = _pts_counts(lines)
     for lineno in counts:
         lines[lineno - 1] = ""
@@ -575,7 +584,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
         log.truncate(f"the file ends mid-line (line {last_point_line})", line=last_point_line)
     _check_pts_counts(counts, [ln for ln, _, _ in rows] + [ln for ln, _ in bad], log)
     if not kept:
-        raise reject(f"no readable 'x y z' rows found{log.summary()}")
+        raise reject(f"no readable 'x y z' rows found{log.summary()}" + (f": {unmatched}" if unmatched else ""))
     if len(kept) < MIN_SCAN_ROWS and usual in (4, 5):
         raise reject(f"the file holds {len(kept)} rows of {usual} numbers: a nominal table (LRA or XYZ-CLR), not a "
                      f"scan, which needs at least {MIN_SCAN_ROWS} x, y, z samples. Give a nominal as "

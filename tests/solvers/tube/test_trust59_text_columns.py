@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.tube.upload import parse_upload
 
 POINTS = np.loadtxt(Path(__file__).parents[3] / "examples" / "tube" / "scan.xyz")
@@ -85,3 +85,15 @@ def test_a_trailing_delimiter_is_no_column_of_its_own():
     points, warned = _read("scan.csv", text)
     np.testing.assert_allclose(points, POINTS, atol=5e-4)
     assert warned["text_column_skipped"].details["columns"] == ["Point"]
+
+
+@pytest.mark.parametrize(("header", "row", "said"), [
+    ("name x y z", "pt {k} {x:.3f} {y:.3f} {z:.3f}", "line 2 holds 5 cells ('pt 0 "),
+    ("Point,X,Y,Z", "P{k},{x:.3f},{y:.3f},{z:.3f},extra", "line 2 holds 5 cells ('P0,"),
+])
+def test_rows_that_match_no_reading_of_the_header_are_refused_naming_both(header, row, said):
+    text = header + "\n" + "".join(row.format(k=k, x=x, y=y, z=z) + "\n" for k, (x, y, z) in enumerate(POINTS))
+    with pytest.raises(InputRejected) as refused:
+        _read("scan.txt", text)
+    message = refused.value.errors[0].msg
+    assert "the header on line 1 names 4 columns" in message and said in message
