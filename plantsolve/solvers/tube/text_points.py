@@ -365,11 +365,12 @@ def _with_units_line(names_line: str, units_line: str) -> str | None:
 
 
 _WHOLE = re.compile(r"^[-+]?\d+$")
+_LEADING_WHOLE = re.compile(r"([-+]?\d+)(?:[,;\s]|$)")  # a row's first cell, a whole number
 
 
 def _counts_rows(lines: list[str]) -> bool:
     """Whether the first column of the rows of numbers counts them: whole numbers rising by one step over every
-    row of four or more numbers (0, 1, 2, ...; 1, 2, 3, ...; a survey's point numbers 1001, 1002, ...; 2, 4, 6,
+    row of numbers (0, 1, 2, ...; 1, 2, 3, ...; a survey's point numbers 1001, 1002, ...; 2, 4, 6,
     ...), a point number written before x, y, z by a file without a header (from 1001 up it was read as x, with no
     word). A scan's x is hardly such a run; where it is one (points sampled a step apart along x) and the fourth
     column is a constant attribute (an intensity), the columns after the count cannot be x, y, z: no point of a
@@ -380,16 +381,15 @@ def _counts_rows(lines: list[str]) -> bool:
         s = line.strip()
         if not s or not starts_number(s):
             continue
-        cells = _SPLIT.split(s, maxsplit=4)
-        if len(cells) < 4:
-            continue  # a cut row: said where the rows are read
-        if not _WHOLE.match(cells[0]) or (len(first) > 1 and int(cells[0]) - first[-1] != first[1] - first[0]):
+        whole = _LEADING_WHOLE.match(s)
+        if whole is None or (len(first) > 1 and int(whole.group(1)) - first[-1] != first[1] - first[0]):
             return False
-        first.append(int(cells[0]))
+        first.append(int(whole.group(1)))
         if len(fourth) < ROWS_LOOKED_AT:
+            cells = _SPLIT.split(s, maxsplit=4)
             try:
                 fourth.append(float(cells[3]))
-            except ValueError:
+            except (IndexError, ValueError):
                 return False
     return len(first) >= 10 and first[1] > first[0] and bool(np.ptp(fourth) > 0)
 
