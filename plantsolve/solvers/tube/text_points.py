@@ -40,6 +40,7 @@ from plantsolve.solvers.tube.number_cells import (
     cell_delimiter,
     commas_split_decimals,
     decimal_mark,
+    is_number,
     plain,
     starts_number,
 )
@@ -213,19 +214,6 @@ def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
 HEADER_LINES_LOOKED_AT = 100  # a header stands within the file's first lines
 
 
-def _is_number(cell: str, delimiter: str | None) -> bool:
-    """Whether a cell of a row split at ``delimiter`` is a number as :mod:`.number_cells` reads one, in either
-    decimal mark (``251,500`` in a file of semicolons): the cells of text are told from them before the file's
-    mark is known, and a spreadsheet's decimal comma read as text took the rows for more header."""
-    for mark in ".,":
-        try:
-            float(plain(cell, mark, delimiter is None))
-        except ValueError:
-            continue
-        return True
-    return False
-
-
 def _header_delimiter(line: str) -> str | None:
     """What separates a header's names (:func:`_header_names`): a comma, semicolon or tab, else blanks (None)."""
     return next((d for d in (",", ";", "\t") if d in line), None)
@@ -272,7 +260,7 @@ def _without_text_columns(lines: list[str], log: ReadLog) -> tuple[list[str], st
         if not s or _is_comment(s):
             continue
         looked_at += 1
-        if looked_at > HEADER_LINES_LOOKED_AT or all(_is_number(f, None) for f in _SPLIT.split(s.lstrip("/")) if f):
+        if looked_at > HEADER_LINES_LOOKED_AT or all(is_number(f) for f in _SPLIT.split(s.lstrip("/")) if f):
             return lines, unmatched  # the rows start, or no header was found: no text column
         if header_at is not None:
             if _with_units_line(lines[header_at], s):
@@ -297,9 +285,9 @@ def _text_columns(header: str, row: str) -> list[int]:
     delimiter = _header_delimiter(header.strip().lstrip("/#").strip())
     cells = _split_at(row, delimiter)
     axes = _axes([_name_and_unit(n)[0] for n in names])
-    if len(cells) != len(names) or len(axes) < 3 or not all(_is_number(cells[i], delimiter) for i in axes.values()):
+    if len(cells) != len(names) or len(axes) < 3 or not all(is_number(cells[i], delimiter is None) for i in axes.values()):
         return []
-    return [k for k, c in enumerate(cells) if k not in axes.values() and c and not _is_number(c, delimiter)]
+    return [k for k, c in enumerate(cells) if k not in axes.values() and c and not is_number(c, delimiter is None)]
 
 
 def _cells_left_out(lines: list[str], header_at: int, first_row: int, text: list[int], log: ReadLog) -> list[str]:
