@@ -101,15 +101,23 @@ def align(measured: TubeModel, nominal: TubeModel,
 
 
 def options_without_nominal(opts: TubeOptions) -> Diagnostic | None:
-    """A warning naming the inspection's options a request sets without a nominal (``inspection_tolerances``, a
-    ``damping``, ``springback_model`` or ``nominal_format`` other than the default): there is nothing to inspect,
-    and they were ignored without a word (tolerances sent for an inspection whose nominal was left out)."""
+    """A warning naming the inspection's options a request sets that nothing reads (``inspection_tolerances``, a
+    ``damping``, ``springback_model`` or ``nominal_format`` other than the default, without a nominal; a
+    ``nominal_format`` with a nominal given as ``nominal`` or ``nominal_xyz_clr``, which it does not describe):
+    they were ignored without a word (tolerances sent for an inspection whose nominal was left out)."""
+    changed = [name for name in ("damping", "springback_model", "nominal_format")
+               if getattr(opts, name) != TubeOptions.model_fields[name].default]
+    if opts.nominal_csv is None and "nominal_format" in changed and \
+            (opts.nominal is not None or opts.nominal_xyz_clr is not None):
+        given = "nominal" if opts.nominal is not None else "nominal_xyz_clr"
+        return Diagnostic(code="inspection_options_ignored", message=(
+            f"options.nominal_format ({opts.nominal_format!r}) says how to read options.nominal_csv, and the nominal "
+            f"is given as options.{given}: it was ignored."), details={"options": ["nominal_format"]})
     if opts.nominal is not None or opts.nominal_xyz_clr is not None or opts.nominal_csv is not None:
         return None
     set_here = opts.inspection_tolerances.model_dump(exclude_none=True)
     named = [f"inspection_tolerances ({', '.join(set_here)})"] if set_here else []
-    named += [name for name in ("damping", "springback_model", "nominal_format")
-              if getattr(opts, name) != TubeOptions.model_fields[name].default]
+    named += changed
     if not named:
         return None
     return Diagnostic(code="inspection_options_ignored", message=(

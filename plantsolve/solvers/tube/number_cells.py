@@ -106,6 +106,18 @@ def number(cell: str, mark: str, blank_is_delimiter: bool = True) -> float:
     return float(plain(cell, mark, blank_is_delimiter))
 
 
+def is_number(cell: str, blank_is_delimiter: bool = True) -> bool:
+    """Whether a cell is a number in either decimal mark (``251,500`` or ``251.500``): a number is told from text
+    so before a file's mark is known (plain ``float`` took a decimal comma for text)."""
+    for mark in ".,":
+        try:
+            number(cell, mark, blank_is_delimiter)
+        except ValueError:
+            continue
+        return True
+    return False
+
+
 def decimals(cell: str, mark: str = ".") -> int:
     """How many digits a number cell writes after its decimal mark, its exponent left out: a file printed with a
     fixed number of decimals writes them alike, so a last number with fewer was cut."""

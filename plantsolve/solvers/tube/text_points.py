@@ -10,14 +10,15 @@ the nominal reader shares (:mod:`.number_cells`): split at the commas they would
 point. A row written with the file's other decimal mark is left out and named.
 
 A header line with one name per column is read: columns named x, y, z (``X``, ``x_mm``, ``x [m]``, ``point_x``, or
-easting, northing, elevation) are
-the coordinates wherever they stand (an index column first is common), and a unit they all state is the file's
-unit, in their names or in a line of units under them (``x,y,z`` then ``mm,mm,mm``); a column of text beside
-them (a point's name, ``Point,X,Y,Z`` over ``P12,...``) is left out, said in a warning. Without a header, a first
-column that counts the rows (0 or 1, 2, 3, ...) is a row number: x, y, z are the next three columns (said in a
-warning). A header that names no x, y and z is a table of something else — a compressor map, an LRA or XYZ-CLR
-nominal — and is refused at intake naming its columns, as is a short table of four or five numbers a row (a
-nominal without a header): a tube scan is three coordinates per sample."""
+easting, northing, elevation) are the coordinates wherever they stand (an index column first is common), and a unit
+they all state is the file's unit, in their names or in a line of units under them (``x,y,z`` then ``mm,mm,mm``); a
+column of text beside them (a point's name, ``Point,X,Y,Z`` over ``P12,...``, also under a line of units, in a
+``#`` header naming x, y, z, with decimal commas or quoted cells) is left out, said in a warning. Without a header,
+a first column that counts the rows (whole numbers rising by one step: 0 or 1, 2, 3, ..., 1001, 1002, ...) is a
+row number: x, y, z are the next three columns (said in a warning). A header that names no x, y and z is a table
+of something else — a compressor map, an LRA or XYZ-CLR nominal — and is refused at intake naming its columns, as
+is a short table of four or five numbers a row (a nominal without a header): a tube scan is three coordinates per
+sample."""
 
 from __future__ import annotations
 
@@ -39,6 +40,7 @@ from plantsolve.solvers.tube.number_cells import (
     cell_delimiter,
     commas_split_decimals,
     decimal_mark,
+    is_number,
     plain,
     starts_number,
 )
@@ -77,9 +79,8 @@ def _header_names(line: str) -> list[str]:
     also between blanks (``x [m] y [m] z [m]``: split at every blank, its units were columns of their own, the
     header no column header, and the file read in the request's unit) when the bracketed word is a length unit."""
     s = line.strip().lstrip("/#").strip()
-    for delim in (",", ";", "\t"):
-        if delim in s:
-            return [c.strip() for c in s.split(delim)]
+    if (delimiter := _header_delimiter(s)) is not None:
+        return _split_at(s, delimiter)
     names: list[str] = []
     for word in s.split():
         if names and _BRACKETED.fullmatch(word) and word[1:-1].strip() and \
@@ -213,54 +214,80 @@ def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
 HEADER_LINES_LOOKED_AT = 100  # a header stands within the file's first lines
 
 
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
-
-
 def _header_delimiter(line: str) -> str | None:
     """What separates a header's names (:func:`_header_names`): a comma, semicolon or tab, else blanks (None)."""
     return next((d for d in (",", ";", "\t") if d in line), None)
 
 
 def _split_at(line: str, delimiter: str | None) -> list[str]:
-    return [c.strip() for c in line.split(delimiter)] if delimiter else line.split()
+    """A line's cells between ``delimiter`` (blanks: None), quoted cells read as a spreadsheet writes them, and
+    without the empty cells a trailing delimiter leaves (``Point,X,Y,Z,``: no column of its own)."""
+    if delimiter is None:
+        return line.split()
+    cells = [c.strip() for c in (next(csv.reader([line], delimiter=delimiter)) if '"' in line
+                                 else line.split(delimiter))]
+    while cells and not cells[-1]:
+        cells.pop()
+    return cells
 
 
-def _without_text_columns(lines: list[str], log: ReadLog) -> list[str]:
+def _joined(cells: list[str], delimiter: str | None) -> str:
+    """``cells`` written again between ``delimiter``, a cell holding the delimiter quoted (``"2,515.5"``)."""
+    if delimiter is None:
+        return " ".join(cells)
+    return delimiter.join(f'"{c}"' if delimiter in c else c for c in cells)
+
+
+def _is_comment(line: str) -> bool:
+    """Whether a (stripped, not blank) line before the rows is a comment: ``%``, a single ``/``, or ``#`` unless it
+    names x, y and z (``# name x y z``, a header as :func:`_columns` reads one)."""
+    if line[0] == "%" or (line[0] == "/" and not line.startswith("//")):
+        return True
+    return line[0] == "#" and len(_axes([_name_and_unit(n)[0] for n in _header_names(line)])) < 3
+
+
+def _without_text_columns(lines: list[str], log: ReadLog) -> tuple[list[str], str | None]:
     """The lines without the cells of columns that hold text (a point's name: ``Point,X,Y,Z`` over ``P12,...``,
     ``name x y z``) when a header names x, y and z and the first row under it holds numbers in those columns, with
     a warning naming the columns left out. A line of text under a header was taken for more header, and the file
-    was refused as holding no readable rows. Other files are returned as they are."""
+    was refused as holding no readable rows. Other files are returned as they are, with the header naming x, y, z
+    and the first line under it that matches none of this (said when the file is refused for want of rows)."""
     header_at = None
+    unmatched = None
     looked_at = 0
     for at, line in enumerate(lines):
         s = line.strip()
-        if not s or s[0] in "#%" or (s[0] == "/" and not s.startswith("//")):
+        if not s or _is_comment(s):
             continue
         looked_at += 1
-        if looked_at > HEADER_LINES_LOOKED_AT or all(_is_number(f) for f in _SPLIT.split(s.lstrip("/")) if f):
-            return lines  # the rows start, or no header was found: no text column
+        if looked_at > HEADER_LINES_LOOKED_AT or all(is_number(f) for f in _SPLIT.split(s.lstrip("/")) if f):
+            return lines, unmatched  # the rows start, or no header was found: no text column
         if header_at is not None:
+            if _with_units_line(lines[header_at], s):
+                continue  # ``Point,X,Y,Z`` over ``,mm,mm,mm``: the rows start under the units
             text = _text_columns(lines[header_at], s)
             if text:
-                return _cells_left_out(lines, header_at, at, text, log)
+                return _cells_left_out(lines, header_at, at, text, log), None
+            names = _header_names(lines[header_at])
+            if unmatched is None and len(_axes([_name_and_unit(n)[0] for n in names])) == 3:
+                cells = _split_at(s, _header_delimiter(lines[header_at].strip().lstrip("/#").strip()))
+                unmatched = (f"the header on line {header_at + 1} names {len(names)} columns ({', '.join(names)}), "
+                             f"line {at + 1} holds {len(cells)} cells ({s[:60]!r}) that do not read as a row of "
+                             "them (numbers under x, y, z)")
         header_at = at
-    return lines
+    return lines, unmatched
 
 
 def _text_columns(header: str, row: str) -> list[int]:
     """The columns of ``row`` that hold text where ``header`` names x, y, z and ``row`` holds numbers in those
     (none when it does not)."""
     names = _header_names(header)
-    cells = _split_at(row, _header_delimiter(header.strip().lstrip("/#").strip()))
+    delimiter = _header_delimiter(header.strip().lstrip("/#").strip())
+    cells = _split_at(row, delimiter)
     axes = _axes([_name_and_unit(n)[0] for n in names])
-    if len(cells) != len(names) or len(axes) < 3 or not all(_is_number(cells[i]) for i in axes.values()):
+    if len(cells) != len(names) or len(axes) < 3 or not all(is_number(cells[i], delimiter is None) for i in axes.values()):
         return []
-    return [k for k, c in enumerate(cells) if k not in axes.values() and not _is_number(c)]
+    return [k for k, c in enumerate(cells) if k not in axes.values() and c and not is_number(c, delimiter is None)]
 
 
 def _cells_left_out(lines: list[str], header_at: int, first_row: int, text: list[int], log: ReadLog) -> list[str]:
@@ -276,7 +303,7 @@ def _cells_left_out(lines: list[str], header_at: int, first_row: int, text: list
     for at in range(header_at + 1, len(lines)):
         cells = _split_at(lines[at].strip(), delimiter)
         if len(cells) == len(names):
-            out[at] = joint.join(c for k, c in enumerate(cells) if k not in text)
+            out[at] = _joined([c for k, c in enumerate(cells) if k not in text], delimiter)
     left_out = [names[k] for k in text]
     example = _split_at(lines[first_row].strip(), delimiter)[text[0]]
     log.warn(Diagnostic(code="text_column_skipped", message=(
@@ -292,9 +319,9 @@ def _first_row(lines: list[str]) -> tuple[str | None, int, int]:
     header, header_line = None, 0
     for lineno, line in enumerate(lines, 1):
         s = line.strip()
-        if not s or s[0] in "#%" or (s[0] == "/" and not s.startswith("//")):
+        if not s or _is_comment(s):
             continue
-        fields = [f for f in _SPLIT.split(s.lstrip("/")) if f]
+        fields = [f for f in _SPLIT.split(s.lstrip("/#")) if f]
         try:
             [float(f) for f in fields]
         except ValueError:
@@ -325,30 +352,36 @@ def _with_units_line(names_line: str, units_line: str) -> str | None:
     return ("//" if names_line.strip().startswith("//") else "") + ",".join(named)
 
 
+_WHOLE = re.compile(r"^[-+]?\d+$")
+_LEADING_WHOLE = re.compile(r"([-+]?\d+)(?:[,;\s]|$)")  # a row's first cell, a whole number
+
+
 def _counts_rows(lines: list[str]) -> bool:
-    """Whether the first column of the rows of numbers counts them (0, 1, 2, ... or 1, 2, 3, ...): a row number
-    written before x, y, z by a file without a header. A scan's x is hardly a run of consecutive integers; where it
-    is one (points sampled a unit apart along x) and the fourth column is a constant attribute (an intensity), the
-    columns after the count cannot be x, y, z: no point of a tube's surface shares one coordinate."""
-    rows = []
+    """Whether the first column of the rows of numbers counts them: whole numbers rising by one step over every
+    row of numbers (0, 1, 2, ...; 1, 2, 3, ...; a survey's point numbers 1001, 1002, ...; 2, 4, 6,
+    ...), a point number written before x, y, z by a file without a header (from 1001 up it was read as x, with no
+    word). A scan's x is hardly such a run; where it is one (points sampled a step apart along x) and the fourth
+    column is a constant attribute (an intensity), the columns after the count cannot be x, y, z: no point of a
+    tube's surface shares one coordinate."""
+    first: list[int] = []
+    fourth: list[float] = []
     for line in lines:
         s = line.strip()
         if not s or not starts_number(s):
             continue
-        try:
-            rows.append([float(f) for f in _SPLIT.split(s) if f][:4])
-        except ValueError:
+        whole = _LEADING_WHOLE.match(s)
+        if whole is None or (len(first) > 1 and int(whole.group(1)) - first[-1] != first[1] - first[0]):
             return False
-        if len(rows) == ROWS_LOOKED_AT:
-            break
-    if len(rows) < 10 or any(len(r) < 4 for r in rows):
-        return False
-    first = np.array([r[0] for r in rows])
-    fourth = np.array([r[3] for r in rows])
-    return first[0] in (0.0, 1.0) and bool(np.all(np.diff(first) == 1.0)) and bool(np.ptp(fourth) > 0)
+        first.append(int(whole.group(1)))
+        if len(fourth) < ROWS_LOOKED_AT:
+            cells = _SPLIT.split(s, maxsplit=4)
+            try:
+                fourth.append(float(cells[3]))
+            except (IndexError, ValueError):
+                return False
+    return len(first) >= 10 and first[1] > first[0] and bool(np.ptp(fourth) > 0)
 
 
-_WHOLE = re.compile(r"^[-+]?\d+$")
 _DECIMAL = re.compile(r"^[-+]?(?:\d+\.\d*|\.\d+)(?:[eE][-+]?\d+)?$")
 
 
@@ -465,7 +498,8 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
         text = decode_text(content, "point list")
     except InputRejected as e:
         raise reject(f"the file is not text in UTF-8, UTF-16 or Windows-1252: {e.errors[0].msg}") from None
-    lines, unreadable = _plain_rows(_without_text_columns(text.splitlines(), log))
+    named_lines, unmatched = _without_text_columns(text.splitlines(), log)
+    lines, unreadable = _plain_rows(named_lines)
     counts = _pts_counts(lines)
     for lineno in counts:
         lines[lineno - 1] = ""
@@ -475,8 +509,9 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     if cols.names is None and width >= 4 and _counts_rows(lines):
         cols = replace(cols, index=(1, 2, 3))  # the unit a comment states (or its conflict) kept
         log.warn(Diagnostic(code="row_numbers_skipped", message=(
-            f"the rows of {width} numbers have no header and their first column counts them (0 or 1, 2, 3, ...): "
-            "it was read as row numbers, x, y, z from the next three columns. Add a header (e.g. 'n x y z') if "
+            f"the rows of {width} numbers have no header and their first column counts them (whole numbers rising "
+            "by one step from row to row: 0 or 1, 2, 3, ..., 1001, 1002, ...): it was read as point numbers, x, y, z "
+            "from the next three columns. Add a header (e.g. 'n x y z') if "
             "the columns are otherwise."), details={"columns": width, "x_y_z_columns": [2, 3, 4]}))
     elif cols.names is None and width >= 4 and _whole_then_decimals(lines):
         cols = replace(cols, index=(1, 2, 3))
@@ -537,7 +572,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
         log.truncate(f"the file ends mid-line (line {last_point_line})", line=last_point_line)
     _check_pts_counts(counts, [ln for ln, _, _ in rows] + [ln for ln, _ in bad], log)
     if not kept:
-        raise reject(f"no readable 'x y z' rows found{log.summary()}")
+        raise reject(f"no readable 'x y z' rows found{log.summary()}" + (f": {unmatched}" if unmatched else ""))
     if len(kept) < MIN_SCAN_ROWS and usual in (4, 5):
         raise reject(f"the file holds {len(kept)} rows of {usual} numbers: a nominal table (LRA or XYZ-CLR), not a "
                      f"scan, which needs at least {MIN_SCAN_ROWS} x, y, z samples. Give a nominal as "

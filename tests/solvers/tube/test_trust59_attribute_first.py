@@ -69,3 +69,14 @@ def test_whole_x_before_y_z_and_a_reflectance_stays_x(written):
     points, warned = _read(text)
     np.testing.assert_allclose(points, np.c_[np.round(POINTS[:, 0]), POINTS[:, 1:]], atol=5e-4)
     assert "first_column_skipped" not in warned
+
+
+@pytest.mark.parametrize(("start", "step"), [(1001, 1), (2, 1), (0, 2), (5000, 10)])
+def test_point_numbers_rising_by_one_step_are_read_as_row_numbers(start, step):
+    # review: a survey's point numbers from 1001 (or every other number) were read as x, with no word: only a count
+    # from 0 or 1 by ones was told
+    numbers = range(start, start + step * len(POINTS), step)
+    text = "".join(f"{v} {x:.3f} {y:.3f} {z:.3f}\n" for v, (x, y, z) in zip(numbers, POINTS))
+    points, warned = _read(text)
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+    assert warned["row_numbers_skipped"].details["x_y_z_columns"] == [2, 3, 4]

@@ -31,3 +31,14 @@ def test_defaults_or_a_nominal_are_no_warning(options):
     result = _solved(options)
     assert "inspection_options_ignored" not in {w.code for w in result.report.warnings}
     assert (result.inspection is not None) == ("nominal" in options)
+
+
+@pytest.mark.parametrize("options", [
+    {"nominal_format": "lra", "nominal": NOMINAL},
+    {"nominal_format": "xyz_clr", "nominal": NOMINAL},
+])
+def test_a_nominal_format_beside_a_nominal_that_is_no_csv_is_named(options):
+    result = _solved(options)
+    (said,) = [w for w in result.report.warnings if w.code == "inspection_options_ignored"]
+    assert said.details == {"options": ["nominal_format"]} and "given as options.nominal:" in said.message
+    assert result.inspection is not None

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.tube.upload import parse_upload
 
 POINTS = np.loadtxt(Path(__file__).parents[3] / "examples" / "tube" / "scan.xyz")
@@ -47,3 +47,53 @@ def test_a_row_with_text_in_a_coordinate_column_is_left_out_and_named():
     points, warned = _read("scan.csv", "Point,X,Y,Z\n" + "\n".join(rows) + "\n")
     np.testing.assert_allclose(points, np.delete(POINTS, 5, axis=0), atol=5e-4)
     assert warned["records_skipped"].details["lines"] == [7]
+
+
+def _comma(v: float) -> str:
+    return f"{v:.3f}".replace(".", ",")
+
+
+@pytest.mark.parametrize(("name", "head", "row"), [
+    # a decimal comma (a spreadsheet's European export), between semicolons or tabs
+    ("scan.csv", "Point;X;Y;Z\n", lambda k, x, y, z: f"P{k};{_comma(x)};{_comma(y)};{_comma(z)}"),
+    ("scan.txt", "Point\tX\tY\tZ\n", lambda k, x, y, z: f"P{k}\t{_comma(x)}\t{_comma(y)}\t{_comma(z)}"),
+    # a line of units between the header and the rows
+    ("scan.csv", "Point,X,Y,Z\n,mm,mm,mm\n", lambda k, x, y, z: f"P{k},{x:.3f},{y:.3f},{z:.3f}"),
+    ("scan.csv", "Point,X,Y,Z\n-,mm,mm,mm\n", lambda k, x, y, z: f"P{k},{x:.3f},{y:.3f},{z:.3f}"),
+    # a header written as a comment, as a CloudCompare or a script writes it
+    ("scan.txt", "# name x y z\n", lambda k, x, y, z: f"pt{k} {x:.3f} {y:.3f} {z:.3f}"),
+    # quoted cells: numbers, and a name holding the delimiter
+    ("scan.csv", "Point,X,Y,Z\n", lambda k, x, y, z: f'P{k},"{x:.3f}","{y:.3f}","{z:.3f}"'),
+    ("scan.csv", "Point,X,Y,Z\n", lambda k, x, y, z: f'"P {k}, north",{x:.3f},{y:.3f},{z:.3f}'),
+])
+def test_a_text_column_is_left_out_in_a_spreadsheets_layouts(name, head, row):
+    text = head + "".join(row(k, x, y, z) + "\n" for k, (x, y, z) in enumerate(POINTS))
+    points, warned = _read(name, text)
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+    assert warned["text_column_skipped"].details["columns"] in (["Point"], ["name"])
+
+
+def test_the_units_line_under_a_header_with_a_text_column_is_read():
+    text = "Point,X,Y,Z\n,m,m,m\n" + "".join(f"P{k},{x / 1000:.6f},{y / 1000:.6f},{z / 1000:.6f}\n"
+                                            for k, (x, y, z) in enumerate(POINTS))
+    points, _ = _read("scan.csv", text, {"units": "mm"})
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+
+
+def test_a_trailing_delimiter_is_no_column_of_its_own():
+    text = "Point,X,Y,Z,\n" + "".join(f"P{k},{x:.3f},{y:.3f},{z:.3f},\n" for k, (x, y, z) in enumerate(POINTS))
+    points, warned = _read("scan.csv", text)
+    np.testing.assert_allclose(points, POINTS, atol=5e-4)
+    assert warned["text_column_skipped"].details["columns"] == ["Point"]
+
+
+@pytest.mark.parametrize(("header", "row", "said"), [
+    ("name x y z", "pt {k} {x:.3f} {y:.3f} {z:.3f}", "line 2 holds 5 cells ('pt 0 "),
+    ("Point,X,Y,Z", "P{k},{x:.3f},{y:.3f},{z:.3f},extra", "line 2 holds 5 cells ('P0,"),
+])
+def test_rows_that_match_no_reading_of_the_header_are_refused_naming_both(header, row, said):
+    text = header + "\n" + "".join(row.format(k=k, x=x, y=y, z=z) + "\n" for k, (x, y, z) in enumerate(POINTS))
+    with pytest.raises(InputRejected) as refused:
+        _read("scan.txt", text)
+    message = refused.value.errors[0].msg
+    assert "the header on line 1 names 4 columns" in message and said in message
