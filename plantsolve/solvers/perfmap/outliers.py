@@ -85,7 +85,7 @@ def points_off_their_lines(settings: list[Setting], request: PerfmapRequest, int
             f"{off:.0%} of the line's pressure off the curve through its other {len(s.x) - 1} points, which lie "
             f"{misfit:.2%} from it: a pressure or a flow mistyped (a digit dropped or added)? It is fitted as given.",
             details={"setting": list(s.values), "position": s.source_index, "point": k, "row": row,
-                     "field": f"file.row.{row}" if row is not None else f"positions.{s.source_index}.pressure.{k}",
+                     "field": f"file.row.{row}" if row is not None else f"positions.{s.source_index}",
                      "flow": flow, "pressure": pressure, "expected_pressure": expected * pressure / float(s.y[j]),
                      "off": off,
                      "line_misfit": misfit}))

@@ -59,9 +59,19 @@ def test_a_json_body_names_the_point_by_its_position_and_its_values_as_given_in_
     position["pressure"][2] /= 10
     (w,) = [w for w in load(PerfmapRequest.model_validate(body)).warnings if w.code == "point_off_its_line"]
     d = w.details
-    assert (d["position"], d["point"], d["row"], d["field"]) == (3, 2, None, "positions.3.pressure.2")
+    assert (d["position"], d["point"], d["row"], d["field"]) == (3, 2, None, "positions.3")
     assert (d["flow"], d["pressure"]) == (position["flow"][2], position["pressure"][2])  # kg/s as given, not lbm/s
     assert "positions[3] point 2" in w.message
+
+
+def test_a_map_file_names_the_point_by_its_place_in_the_speed_line_and_the_line_heading_it():
+    text = (DATA / "gasturb" / "compmap.map").read_text()
+    row = "     0.70000     11.75000     11.50000     11.30000     11.10000    10.75000"  # Mass Flow, Nc 0.7, line 8
+    assert row in text
+    text = text.replace(row, row.replace("11.10000", "1.110000"))  # its 4th flow, a digit dropped
+    (w,) = _off(text.encode(), "compmap.map")
+    assert (w.details["setting"], w.details["point"], w.details["flow"]) == ([0.7], 3, 1.11)
+    assert "point 4 of the speed line at line 8" in w.message
 
 
 def test_one_point_per_line_is_named_not_its_neighbours():
