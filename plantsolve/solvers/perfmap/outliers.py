@@ -2,8 +2,8 @@
 floor of ``data_not_decreasing_concave`` says a line cannot be fitted well but not where the culprit lies, and a flow
 divided by ten can even leave the line decreasing and concave (its pressure is the line's highest, now at the smallest
 flow). Each point is held against a quadratic fitted through the rest of its line: a point many times further off than
-the rest lie from that curve, and by more than half the line's typical pressure (and flow), is named with its values as given and
-its file row, so that the user finds the typo."""
+the rest lie from that curve, and by more than half the line's typical pressure (and flow), is named with its values
+as given and its file row, so that the user finds the typo."""
 
 from __future__ import annotations
 
@@ -18,7 +18,6 @@ MIN_POINTS = 5  # a quadratic through the other four or more points: fewer say n
 # a real line's choke end (pyCycle's, GasTurb's sample maps) within 25 %
 OFF_SHARE = 0.5
 OFF_TIMES = 20.0  # times the median misfit of the rest: real lines sit that close to their own quadratic
-MAX_NAMED = 10
 
 
 def _off_by(x: np.ndarray, y: np.ndarray, j: int) -> tuple[float, float, float]:
