@@ -13,6 +13,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
+from plantsolve.solvers.perfmap.outliers import points_off_their_lines
 from plantsolve.solvers.perfmap.plausibility import plausibility_warnings
 from plantsolve.solvers.perfmap.speed_names import named_as_speed
 from plantsolve.solvers.perfmap.repeats import disagreeing_repeats, identical_lines
@@ -85,9 +86,10 @@ def _load(request: PerfmapRequest, source: StoredInput | None) -> PerfmapInput:
     rows_of = request.source.rows if request.source and request.source.rows else None
     label = request.source.row_label if rows_of else "line"
     heads = request.source.setting_lines if request.source and request.source.setting_lines else None
-    repeats = disagreeing_repeats(settings, rows_of, label) + identical_lines(settings, rows_of, label, heads)
+    line_notes = disagreeing_repeats(settings, rows_of, label) + identical_lines(settings, rows_of, label, heads)
+    line_notes += points_off_their_lines(settings, request, internal, rows_of, label, heads)
     return PerfmapInput(request, internal, units, settings, info,
-                        contradicted + plausibility_warnings(internal, units, settings) + repeats)
+                        contradicted + plausibility_warnings(internal, units, settings) + line_notes)
 
 
 def placed(error: FieldError, source: dict[str, Any], setting_of: Callable[[int], tuple],
