@@ -14,11 +14,10 @@ easting, northing, elevation) are the coordinates wherever they stand (an index 
 they all state is the file's unit, in their names or in a line of units under them (``x,y,z`` then ``mm,mm,mm``); a
 column of text beside them (a point's name, ``Point,X,Y,Z`` over ``P12,...``, also under a line of units, in a
 ``#`` header naming x, y, z, with decimal commas or quoted cells) is left out, said in a warning. Without a header,
-a first column that counts the rows (whole numbers rising by one step: 0 or 1, 2, 3, ..., 1001, 1002, ...) is a
-row number: x, y, z are the next three columns (said in a warning). A header that names no x, y and z is a table
-of something else — a compressor map, an LRA or XYZ-CLR nominal — and is refused at intake naming its columns, as
-is a short table of four or five numbers a row (a nominal without a header): a tube scan is three coordinates per
-sample."""
+a first column that counts the rows (0 or 1, 2, 3, ...) is a row number: x, y, z are the next three columns (said
+in a warning). A header that names no x, y and z is a table of something else — a compressor map, an LRA or XYZ-CLR
+nominal — and is refused at intake naming its columns, as is a short table of four or five numbers a row (a nominal
+without a header): a tube scan is three coordinates per sample."""
 
 from __future__ import annotations
 
@@ -353,33 +352,29 @@ def _with_units_line(names_line: str, units_line: str) -> str | None:
 
 
 _WHOLE = re.compile(r"^[-+]?\d+$")
-_LEADING_WHOLE = re.compile(r"([-+]?\d+)(?:[,;\s]|$)")  # a row's first cell, a whole number
 
 
 def _counts_rows(lines: list[str]) -> bool:
-    """Whether the first column of the rows of numbers counts them: whole numbers rising by one step over every
-    row of numbers (0, 1, 2, ...; 1, 2, 3, ...; a survey's point numbers 1001, 1002, ...; 2, 4, 6,
-    ...), a point number written before x, y, z by a file without a header (from 1001 up it was read as x, with no
-    word). A scan's x is hardly such a run; where it is one (points sampled a step apart along x) and the fourth
-    column is a constant attribute (an intensity), the columns after the count cannot be x, y, z: no point of a
-    tube's surface shares one coordinate."""
-    first: list[int] = []
-    fourth: list[float] = []
+    """Whether the first column of the rows of numbers counts them (0, 1, 2, ... or 1, 2, 3, ...): a row number
+    written before x, y, z by a file without a header. A scan's x is hardly a run of consecutive integers; where it
+    is one (points sampled a unit apart along x) and the fourth column is a constant attribute (an intensity), the
+    columns after the count cannot be x, y, z: no point of a tube's surface shares one coordinate."""
+    rows = []
     for line in lines:
         s = line.strip()
         if not s or not starts_number(s):
             continue
-        whole = _LEADING_WHOLE.match(s)
-        if whole is None or (len(first) > 1 and int(whole.group(1)) - first[-1] != first[1] - first[0]):
+        try:
+            rows.append([float(f) for f in _SPLIT.split(s) if f][:4])
+        except ValueError:
             return False
-        first.append(int(whole.group(1)))
-        if len(fourth) < ROWS_LOOKED_AT:
-            cells = _SPLIT.split(s, maxsplit=4)
-            try:
-                fourth.append(float(cells[3]))
-            except (IndexError, ValueError):
-                return False
-    return len(first) >= 10 and first[1] > first[0] and bool(np.ptp(fourth) > 0)
+        if len(rows) == ROWS_LOOKED_AT:
+            break
+    if len(rows) < 10 or any(len(r) < 4 for r in rows):
+        return False
+    first = np.array([r[0] for r in rows])
+    fourth = np.array([r[3] for r in rows])
+    return first[0] in (0.0, 1.0) and bool(np.all(np.diff(first) == 1.0)) and bool(np.ptp(fourth) > 0)
 
 
 _DECIMAL = re.compile(r"^[-+]?(?:\d+\.\d*|\.\d+)(?:[eE][-+]?\d+)?$")
@@ -509,9 +504,8 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     if cols.names is None and width >= 4 and _counts_rows(lines):
         cols = replace(cols, index=(1, 2, 3))  # the unit a comment states (or its conflict) kept
         log.warn(Diagnostic(code="row_numbers_skipped", message=(
-            f"the rows of {width} numbers have no header and their first column counts them (whole numbers rising "
-            "by one step from row to row: 0 or 1, 2, 3, ..., 1001, 1002, ...): it was read as point numbers, x, y, z "
-            "from the next three columns. Add a header (e.g. 'n x y z') if "
+            f"the rows of {width} numbers have no header and their first column counts them (0 or 1, 2, 3, ...): "
+            "it was read as row numbers, x, y, z from the next three columns. Add a header (e.g. 'n x y z') if "
             "the columns are otherwise."), details={"columns": width, "x_y_z_columns": [2, 3, 4]}))
     elif cols.names is None and width >= 4 and _whole_then_decimals(lines):
         cols = replace(cols, index=(1, 2, 3))

@@ -71,12 +71,20 @@ def test_whole_x_before_y_z_and_a_reflectance_stays_x(written):
     assert "first_column_skipped" not in warned
 
 
-@pytest.mark.parametrize(("start", "step"), [(1001, 1), (2, 1), (0, 2), (5000, 10)])
-def test_point_numbers_rising_by_one_step_are_read_as_row_numbers(start, step):
-    # review: a survey's point numbers from 1001 (or every other number) were read as x, with no word: only a count
-    # from 0 or 1 by ones was told
-    numbers = range(start, start + step * len(POINTS), step)
-    text = "".join(f"{v} {x:.3f} {y:.3f} {z:.3f}\n" for v, (x, y, z) in zip(numbers, POINTS))
+@pytest.mark.parametrize("written", ["plain", "row deleted", "row repeated", "cut last cell", "decimals"])
+def test_a_row_count_with_a_flaw_past_its_first_rows_is_still_read_as_row_numbers(written):
+    # review: a count checked over every row read one deleted, repeated or cut row, or a count written with decimals
+    # (numpy's savetxt), as x: a straight of 3,999 mm with status ok; the first rows decide, as before
+    rows = [f"{n} {x:.3f} {y:.3f} {z:.3f}" for n, (x, y, z) in enumerate(POINTS, start=1)]
+    if written == "row deleted":
+        del rows[len(rows) // 2]
+    elif written == "row repeated":
+        rows.insert(len(rows) // 2, rows[len(rows) // 2])
+    elif written == "decimals":
+        rows = [f"{n:.3f} {x:.3f} {y:.3f} {z:.3f}" for n, (x, y, z) in enumerate(POINTS, start=1)]
+    text = "\n".join(rows) + "\n"
+    if written == "cut last cell":
+        text += "30"
     points, warned = _read(text)
-    np.testing.assert_allclose(points, POINTS, atol=5e-4)
     assert warned["row_numbers_skipped"].details["x_y_z_columns"] == [2, 3, 4]
+    assert np.ptp(points[:, 0]) < np.ptp(POINTS[:, 0]) + 1e-3  # x is the scan's, not the count's
