@@ -19,16 +19,18 @@ def where_cut(tail: bytes) -> str | None:
     """None when the text whose last bytes are ``tail`` ends with 'END-ISO-10303-21;' (a comment after it is
     allowed); else where it stops, told by its last entity instance (the file's own numbering)."""
     trailer = tail[-TRAILER_BYTES:].rstrip(b" \t\r\n\x00\x1a")  # NUL padding, the DOS end-of-file mark
-    trailer = _TRAILING_COMMENT.sub(b"", trailer).rstrip()
+    while (uncommented := _TRAILING_COMMENT.sub(b"", trailer).rstrip(b" \t\r\n\x00\x1a")) != trailer:
+        trailer = uncommented  # a comment after the trailer, or several
     if trailer.endswith(b"END-ISO-10303-21;"):
         return None
+    after_data = trailer.rpartition(b"ENDSEC;")
+    if after_data[1] and b"END-ISO-10303-21;".startswith(after_data[2].strip().upper()):
+        return "it stops after its DATA section's 'ENDSEC;', every instance there: only its closing line is missing"
     last = _ENTITY.findall(trailer)
     if not last:
         return "it stops after " + repr(trailer[-40:].decode("latin-1"))
     if trailer.endswith(b";") and trailer.rsplit(b";", 2)[-2].lstrip().startswith(b"#" + last[-1]):
         return f"it stops after entity #{last[-1].decode()}, before 'ENDSEC;'"
-    if trailer.rstrip().endswith(b"ENDSEC;"):
-        return "it stops after its DATA section's 'ENDSEC;'"
     return f"it stops inside entity #{last[-1].decode()}"
 
 

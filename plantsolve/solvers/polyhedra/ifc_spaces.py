@@ -104,12 +104,14 @@ def parse_ifc(content: bytes) -> dict:
     warnings = []
     cut = where_cut(text[-TRAILER_BYTES:].encode("latin-1", errors="replace"))
     cut_line = line_ends(text, 0, len(text.rstrip())) + 1 if cut is not None else None
-    if cut is not None:  # the spaces read are whole; those after the cut, and relations written last, are not
-        warnings.append(truncated_file(cut_line, f"the file does not end with 'END-ISO-10303-21;' ({cut}): it was cut "
-                                       "in transfer or export. The spaces, quantities and relations after the cut "
-                                       "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
-    was_cut = f" (the file was cut short: {cut})" if cut else ""
     blanked = blank_strings_and_comments(text)  # scanned for instances: a ';#3=B' in a string defines none
+    whole = holds_every_instance(blanked)
+    if cut is not None:  # the spaces read are whole; those after the cut, and relations written last, are not
+        lost = ("Every instance is there; the zones are those of the whole file." if whole else
+                "The spaces, quantities and relations after the cut are missing; the zones are those of the spaces read.")
+        warnings.append(truncated_file(cut_line, f"the file does not end with 'END-ISO-10303-21;' ({cut}): it was cut "
+                                       f"in transfer or export. {lost}", cut=cut).model_dump())
+    was_cut = f" (the file was cut short: {cut})" if cut else ""
     left_out = lines_left_out(blanked, model, cut is not None)
     for found in (left_out, lines_of_another_schema(blanked, model)):
         if found is not None:
@@ -206,7 +208,7 @@ def parse_ifc(content: bytes) -> dict:
     read_to_cut = {"read_to_cut": {
         "format": "IFC", "line": cut_line, "spaces_named": len(spaces), "spaces_measured": len(shaped),
         "spaces_not_measured": [label[s.id()] for s in spaces if s.id() not in shaped][:MAX_SKIPPED_LISTED],
-        "objects_past_cut": aggregated_past_cut(blanked, model)}} if cut and not holds_every_instance(blanked) else {}
+        "objects_past_cut": aggregated_past_cut(blanked, model)}} if cut and not whole else {}
     return {"units": "m", "vertices": np.concatenate(vertices).tolist(), "faces": faces,
             "source": {"format": "ifc", "schema": model.schema,
                        "units": stated(symbol(length_scale), length_scale,
