@@ -556,8 +556,9 @@ def _canonical(value):
     return value
 
 
-def reading(spec, name: str, data: bytes, options: dict | None) -> str | None:
-    """A fingerprint of what the kind's reader makes of the file (None when it refuses it)."""
+def reading(spec, name: str, data: bytes, options: dict | None, converted=None) -> str | None:
+    """A fingerprint of what the kind's reader makes of the file (None when it refuses it); ``converted``, when
+    given, turns the request read into what is compared (the values as the solver takes them, say)."""
     import tempfile
 
     from plantsolve.solvers.base import StoredInput
@@ -567,6 +568,8 @@ def reading(spec, name: str, data: bytes, options: dict | None) -> str | None:
         path.write_bytes(data)
         try:
             request = spec.parse_upload(StoredInput.from_path(path, name), options)
+            if converted is not None:
+                request = converted(request)
         except Exception:  # noqa: BLE001 - a refusal: the HTTP column says which
             return None
     return hashlib.sha256(json.dumps(_canonical(request.model_dump(mode="json")), sort_keys=True).encode()

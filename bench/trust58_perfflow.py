@@ -35,13 +35,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import mistakes_table as table  # one BLAS thread, before numpy
 from trust57_mistakes import (
-    _canonical,
     _flowmeter_inputs,
     _json_edited,
     _said,
     _utf16,
     _xlsx,
 )
+from trust57_mistakes import reading as trust57_reading
 
 
 def _text(path: str) -> str:
@@ -269,26 +269,18 @@ def flowmeter_cases() -> list[tuple]:
 CASES = {"perfmap": perfmap_cases, "flowmeter": flowmeter_cases}
 
 
+def _in_solver_units(request):
+    """The values as the solver takes them, converted (a request with ``result_units``)."""
+    from plantsolve.solvers.perfmap.validation import load
+
+    return load(request).internal.model_copy(update={"units": None, "source": None})
+
+
 def reading(spec, name: str, data: bytes, options: dict | None) -> str | None:
-    """What the kind's reader makes of the file, order-free (None when it refuses it)."""
-    import hashlib
-    import tempfile
-
-    from plantsolve.solvers.base import StoredInput
-
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / name
-        path.write_bytes(data)
-        try:
-            request = spec.parse_upload(StoredInput.from_path(path, name), options)
-            if (options or {}).get("result_units"):  # the values as the solver takes them, converted
-                from plantsolve.solvers.perfmap.validation import load
-
-                request = load(request).internal.model_copy(update={"units": None, "source": None})
-        except Exception:  # noqa: BLE001 - a refusal: the HTTP column says which
-            return None
-    return hashlib.sha256(json.dumps(_canonical(request.model_dump(mode="json")), sort_keys=True).encode()
-                          ).hexdigest()[:12]
+    """What the kind's reader makes of the file, order-free (None when it refuses it); with ``result_units``, the
+    values as the solver takes them."""
+    return trust57_reading(spec, name, data, options,
+                           _in_solver_units if (options or {}).get("result_units") else None)
 
 
 def child(kinds: list[str], only: list[str] | None = None) -> None:
