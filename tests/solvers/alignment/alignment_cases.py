@@ -128,3 +128,16 @@ def loop_grid_with_a_turned_tie_in():
     for p in moved.ports:
         p.direction = Rotation.from_rotvec([0.0, 0.0, np.radians(3.0)]).apply(p.direction).tolist()
     return req.model_copy(update={"components": comps})
+
+
+def random_kkt_blocks(seed: int = 3):
+    """A cost of ten random positive-definite 3 x 3 blocks and 12 random constraints on its 30 variables, as the
+    KKT tests build them: ``(H, A, rng)``, the generator left where the two were drawn for what a test draws next."""
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(seed)
+    blocks = []
+    for _ in range(10):
+        B = rng.normal(size=(3, 3))
+        blocks.append(B @ B.T + 0.5 * np.eye(3))
+    return sp.block_diag(blocks, format="csc"), sp.csr_matrix(rng.normal(size=(12, 30))), rng

@@ -5,19 +5,14 @@ five times as dear as an elimination)."""
 
 import numpy as np
 import scipy.sparse as sp
+from alignment_cases import random_kkt_blocks
 from scipy.sparse.linalg import splu
 
 from plantsolve.solvers.alignment.kkt import SchurSolve, block_inverse
 
 
 def _kkt(seed: int = 3):
-    rng = np.random.default_rng(seed)
-    blocks = []
-    for _ in range(10):
-        B = rng.normal(size=(3, 3))
-        blocks.append(B @ B.T + 0.5 * np.eye(3))
-    H = sp.block_diag(blocks, format="csc")
-    A = sp.csr_matrix(rng.normal(size=(12, 30)))
+    H, A, rng = random_kkt_blocks(seed)
     delta = 1e-14
     Hinv = block_inverse(H)
     S = A @ Hinv @ A.T + delta * sp.identity(12)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import qdldl
 import scipy.sparse as sp
+from alignment_cases import random_kkt_blocks
 from scipy.sparse.linalg import splu, spsolve
 
 from plantsolve.solvers.alignment.kkt import (
@@ -50,13 +51,7 @@ def test_block_inverse_refuses_a_cost_that_is_not_positive_definite(where):
 
 
 def _kkt(seed: int = 3):
-    rng = np.random.default_rng(seed)
-    blocks = []
-    for _ in range(10):
-        B = rng.normal(size=(3, 3))
-        blocks.append(B @ B.T + 0.5 * np.eye(3))
-    H = sp.block_diag(blocks, format="csc")
-    A = sp.csr_matrix(rng.normal(size=(12, 30)))
+    H, A, rng = random_kkt_blocks(seed)
     return H, A, rng.normal(size=42)
 
 
