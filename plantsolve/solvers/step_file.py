@@ -15,16 +15,29 @@ _TRAILING_COMMENT = re.compile(rb"/\*(?:(?!\*/).)*\*/\s*$", re.DOTALL)
 _ENTITY = re.compile(rb"#(\d+)\s*=")
 
 
+_PADDING = " \t\r\n\x00\x1a"  # what a transfer or a disk leaves after the last byte written: NULs, a DOS end-of-file
+_TRAILER = "END-ISO-10303-21;"
+
+
+def holds_every_instance(text: str) -> bool:
+    """Whether a file (or its last bytes) that does not end with the trailer still holds its whole DATA section: all
+    it lacks is (part of) 'END-ISO-10303-21;' after the last 'ENDSEC;'. ``text``: with its strings and comments
+    blanked (or the comments after its end taken off)."""
+    text = text.rstrip(_PADDING)
+    end = text.rfind("ENDSEC;")
+    return end >= 0 and _TRAILER.startswith(text[end + len("ENDSEC;"):].strip(_PADDING).upper())
+
+
 def where_cut(tail: bytes) -> str | None:
     """None when the text whose last bytes are ``tail`` ends with 'END-ISO-10303-21;' (a comment after it is
     allowed); else where it stops, told by its last entity instance (the file's own numbering)."""
-    trailer = tail[-TRAILER_BYTES:].rstrip(b" \t\r\n\x00\x1a")  # NUL padding, the DOS end-of-file mark
-    while (uncommented := _TRAILING_COMMENT.sub(b"", trailer).rstrip(b" \t\r\n\x00\x1a")) != trailer:
+    padding = _PADDING.encode()  # NUL padding, the DOS end-of-file mark
+    trailer = tail[-TRAILER_BYTES:].rstrip(padding)
+    while (uncommented := _TRAILING_COMMENT.sub(b"", trailer).rstrip(padding)) != trailer:
         trailer = uncommented  # a comment after the trailer, or several
-    if trailer.endswith(b"END-ISO-10303-21;"):
+    if trailer.endswith(_TRAILER.encode()):
         return None
-    after_data = trailer.rpartition(b"ENDSEC;")
-    if after_data[1] and b"END-ISO-10303-21;".startswith(after_data[2].strip().upper()):
+    if holds_every_instance(trailer.decode("latin-1")):
         return "it stops after its DATA section's 'ENDSEC;', every instance there: only its closing line is missing"
     last = _ENTITY.findall(trailer)
     if not last:

@@ -19,18 +19,6 @@ _AGGREGATES = re.compile(r"(?:\A|;)[ \t\r\n]*#\d+[ \t]*=[ \t]*IFCRELAGGREGATES[ 
                          re.IGNORECASE)
 _RELATED = re.compile(r"#(\d+)[ \t\r\n]*,[ \t\r\n]*\(([^()]*)\)[ \t\r\n]*$")
 _ID = re.compile(r"#(\d+)")
-_PADDING = " \t\r\n\x00\x1a"  # what a transfer or a disk leaves after the last byte written: NULs, a DOS end-of-file
-_TRAILER = "END-ISO-10303-21;"
-
-
-def holds_every_instance(blanked: str) -> bool:
-    """Whether a file cut short still holds its whole DATA section: all it lacks is (part of) the trailer after the
-    last ``ENDSEC;``. ``blanked``: the file's text with its strings and comments blanked."""
-    text = blanked.rstrip(_PADDING)
-    end = text.rfind("ENDSEC;")
-    return end >= 0 and _TRAILER.startswith(text[end + len("ENDSEC;"):].strip(_PADDING).upper())
-
-
 def _held(model: Any, number: int) -> Any:
     try:
         return model.by_id(number)

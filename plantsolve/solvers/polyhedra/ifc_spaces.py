@@ -28,10 +28,16 @@ from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.ifc_units import project_length_scale
 from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
-from plantsolve.solvers.polyhedra.ifc_cut import aggregated_past_cut, holds_every_instance
+from plantsolve.solvers.polyhedra.ifc_cut import aggregated_past_cut
 from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out, lines_of_another_schema
 from plantsolve.solvers.skipped_input import truncated_file
-from plantsolve.solvers.step_file import TRAILER_BYTES, blank_strings_and_comments, line_ends, where_cut
+from plantsolve.solvers.step_file import (
+    TRAILER_BYTES,
+    blank_strings_and_comments,
+    holds_every_instance,
+    line_ends,
+    where_cut,
+)
 
 MAX_SKIPPED_LISTED = 200
 VOLUMES_DEPEND = "the zones' volumes differ by the cube of their ratio"  # on the project's length unit

@@ -12,13 +12,15 @@ import pytest
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.polyhedra.ifc_cut import (
-    aggregated_past_cut,
-    holds_every_instance,
-)
+from plantsolve.solvers.polyhedra.ifc_cut import aggregated_past_cut
 from plantsolve.solvers.polyhedra.solve import solve
 from plantsolve.solvers.polyhedra.upload import parse_upload
-from plantsolve.solvers.step_file import TRAILER_BYTES, blank_strings_and_comments, where_cut
+from plantsolve.solvers.step_file import (
+    TRAILER_BYTES,
+    blank_strings_and_comments,
+    holds_every_instance,
+    where_cut,
+)
 
 IFC = (Path(__file__).parent / "data/ifcopenshell_spaces.ifc").read_text()
 
