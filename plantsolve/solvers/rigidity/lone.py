@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from plantsolve.solvers.rigidity.pieces import pieces
+
 # Two joint axes are one line when their directions differ by at most this (radians, the cross product of unit
 # vectors) and each point lies within LINE_TOLERANCE of the model's size from the other's line. A joint's point and
 # axis come from one part's connectors, so a pin's two joints lie on its own line to rounding: a Technic robot of
@@ -79,21 +81,17 @@ def _turns_about_one_line(joints: list, reach: float) -> tuple[np.ndarray, np.nd
 
 
 def _pieces(clusters: list[list[str]], joints: Sequence) -> list[int]:
-    """The connected piece of each cluster (an index per cluster), joined by the joints."""
-    of = {b: k for k, c in enumerate(clusters) for b in c}
-    root = list(range(len(clusters)))
-
-    def find(x: int) -> int:
-        while root[x] != x:
-            root[x] = root[root[x]]
-            x = root[x]
-        return x
-
+    """The connected piece of each cluster (an index per cluster), joined by the joints (:func:`.pieces.pieces` over
+    the clusters)."""
+    of = {b: str(k) for k, c in enumerate(clusters) for b in c}
+    joined: dict[str, list[str]] = {}
     for j in joints:
-        a, b = find(of[j.bodies[0]]), find(of[j.bodies[1]])
-        if a != b:
-            root[max(a, b)] = min(a, b)
-    return [find(k) for k in range(len(clusters))]
+        joined.setdefault(of[j.bodies[0]], []).append(of[j.bodies[1]])
+    piece = [0] * len(clusters)
+    for number, group in enumerate(pieces([str(k) for k in range(len(clusters))], joined)):
+        for k in group:
+            piece[int(k)] = number
+    return piece
 
 
 def lone_motions(clusters: list[list[str]], joints: Sequence) -> list[LoneMotion]:
